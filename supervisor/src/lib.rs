@@ -1,0 +1,111 @@
+//! SOR-Nav's supervisor: decide whether the region being searched is still
+//! worth searching *before* choosing where to go next.
+//!
+//! # Should I use this crate?
+//! Use it when an object-search robot needs a context gate between "explore
+//! the next frontier" and "relocate to another region": it implements
+//! Algorithm 1 of SOR-Nav (target first, keep an active relocation,
+//! rate-limit, then ask a policy) over any clock, with three policies:
+//!
+//! * [`CommonsensePolicy`] — the embedded default, no network: a naive-Bayes
+//!   prior `P(target | objects seen)` derived from HM3D-Semantics train scenes
+//!   ([`CooccurrencePrior`]). It relocates only on `Conflict(g, S_r)`.
+//! * `LlmPolicy` (cargo feature `llm`, on by default) — an OpenAI-compatible
+//!   chat-completions client with strict JSON-schema answers, validation,
+//!   caching, an asynchronous mode and JSONL record/replay.
+//! * [`NeverRelocate`] — the ablation without the relocation gate.
+//!
+//! The inputs are the crate's own small types (target label, local context
+//! as label/support pairs, candidates as cluster id, graph distance and
+//! context), so the crate does not need the rest of sornav.
+//!
+//! # API themes
+//! * Algorithm 1: [`Supervisor::step`] with [`StepInput`], [`RegionContext`]
+//!   → [`SupervisorCommand`].
+//! * Policies: [`ContextPolicy::decide`] with [`RegionSnapshot`] →
+//!   [`PolicyDecision`] (an action plus a reason).
+//! * The prior and its evaluation: [`CooccurrencePrior`], [`Hm3dStats`],
+//!   [`evaluate_prior`], [`roc_auc`].
+//!
+//! # Example
+//! ```
+//! use sornav_supervisor::{
+//!     Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject,
+//!     MissionKind, MissionState, RegionContext, StepInput, Supervisor, SupervisorCommand,
+//!     SupervisorConfig,
+//! };
+//! use nalgebra::Point3;
+//! use std::time::Duration;
+//!
+//! let mut sup = Supervisor::new(CommonsensePolicy::default(), SupervisorConfig::default())?;
+//! let input = StepInput {
+//!     target: "toilet",
+//!     target_accepted: None,
+//!     mission: MissionState { id: 1, kind: MissionKind::Explore },
+//!     first_frontier: Some(Point3::new(1.0, 0.0, 0.0)),
+//! };
+//! // The robot searches a bedroom; a cluster 6 m away shows a sink and a bathtub.
+//! let region = || RegionContext {
+//!     local_context: ["bed", "wardrobe", "nightstand"]
+//!         .map(|l| ContextObject::new(l, 200.0))
+//!         .to_vec(),
+//!     clusters: vec![ClusterCandidate {
+//!         candidate: Candidate {
+//!             cluster_id: 7,
+//!             distance_m: 6.0,
+//!             context: vec![
+//!                 CandidateObject::new("sink", 80.0, 2.0),
+//!                 CandidateObject::new("bathtub", 300.0, 3.0),
+//!             ],
+//!         },
+//!         u_geo: 3.0,
+//!         waypoint: Point3::new(6.0, 0.0, 0.0),
+//!     }],
+//! };
+//! match sup.step(Duration::ZERO, &input, region)? {
+//!     SupervisorCommand::Relocate { cluster_id, reason, .. } => {
+//!         assert_eq!(cluster_id, 7);
+//!         println!("relocate: {reason}");
+//!     }
+//!     other => panic!("expected a relocation, got {other:?}"),
+//! }
+//! # Ok::<(), sornav_supervisor::SupervisorError>(())
+//! ```
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+mod clock;
+mod commonsense;
+mod context;
+mod error;
+mod evaluation;
+mod hm3d;
+mod label;
+#[cfg(feature = "llm")]
+pub mod llm;
+mod policy;
+mod prior;
+mod supervisor;
+
+pub use clock::Timestamp;
+pub use commonsense::{CommonsenseConfig, CommonsensePolicy, ConflictAssessment};
+pub use context::{Candidate, CandidateObject, ContextObject, RegionSnapshot};
+pub use error::SupervisorError;
+pub use evaluation::{TargetAuc, evaluate_prior, roc_auc};
+pub use hm3d::{Hm3dRegion, Hm3dStats, METADATA_FILE, REGIONS_FILE, Split};
+pub use label::{OBJECTNAV_CATEGORIES, STRUCTURAL_LABELS, normalize_label};
+#[cfg(feature = "llm")]
+pub use llm::{LlmConfig, LlmPolicy};
+pub use policy::{ContextPolicy, NeverRelocate, PolicyAction, PolicyDecision, Situation};
+pub use prior::{
+    ATTRIBUTION, CooccurrencePrior, MP3D_EXTRA_TARGETS, Posterior, PriorBuildConfig, TargetRow,
+};
+/// The README's example, compiled and run as a doc test.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
+
+pub use supervisor::{
+    AlgorithmStep, ClusterCandidate, MissionKind, MissionState, RegionContext, StepInput,
+    Supervisor, SupervisorCommand, SupervisorConfig, SupervisorStats,
+};
