@@ -1,0 +1,237 @@
+//! The global frontier decision graph G_F = ({v_r, v_h} ∪ V_F, E_F).
+
+use nalgebra::{Point2, Vector2};
+use petgraph::graph::{NodeIndex, UnGraph};
+use rustc_hash::FxHashMap;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+
+use crate::Cell;
+
+/// Stable identifier of a frontier node.
+///
+/// An id is kept while its segment persists unchanged (same cells); a segment
+/// that changes is replaced by new nodes with fresh ids. Ids are never reused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub struct FrontierId(pub u64);
+
+/// A node of G_F.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum NodeId {
+    /// The robot node v_r.
+    Robot,
+    /// The home node v_h (initial pose), when enabled.
+    Home,
+    /// A frontier node.
+    Frontier(FrontierId),
+}
+
+/// A frontier node: a segment of frontier cells (traversable known-free cells
+/// 4-adjacent to unknown cells).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FrontierNode {
+    /// Stable id.
+    pub id: FrontierId,
+    /// The segment's cells, sorted.
+    pub cells: Vec<Cell>,
+    /// Mean of the cell centres (m).
+    pub centroid: Point2<f64>,
+    /// Unit principal axis of the cells (PCA).
+    pub axis: Vector2<f64>,
+    /// Extent of the segment along `axis` (m, cell centres span plus one cell).
+    pub extent: f64,
+    /// Executable viewpoint: centre of `viewpoint_cell`, a traversable cell of
+    /// the segment (the one closest to the centroid). Graph paths to this
+    /// node end here.
+    pub viewpoint: Point2<f64>,
+    /// Grid cell of `viewpoint`.
+    pub viewpoint_cell: Cell,
+}
+
+/// The robot or home node.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct AnchorNode {
+    /// Nominal position (the pose given by the caller), m.
+    pub position: Point2<f64>,
+    /// Traversable cell the node's paths start from: the pose's cell, or the
+    /// nearest traversable cell within [`crate::GraphConfig::snap_radius`].
+    /// `None` when there is none (the node then has no edges).
+    pub cell: Option<Cell>,
+}
+
+/// An edge of G_F: an executable path and its cost.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Edge {
+    /// Endpoint the path starts at (the smaller [`NodeId`]).
+    pub from: NodeId,
+    /// Endpoint the path ends at (the larger [`NodeId`]).
+    pub to: NodeId,
+    /// Polyline of cell centres from `from` to `to` (m). Consecutive points
+    /// differ by a multiple of one of the 8 grid directions, and every cell on
+    /// the straight run between them is traversable (no corner cutting), so
+    /// the path is executable by the configured robot. Only direction changes
+    /// are stored; a path between nodes on the same cell has one point.
+    pub path: Vec<Point2<f64>>,
+    /// Path length (m, octile 8-connected), without the displacement term.
+    pub length: f64,
+    /// Traversal cost w_ij: `length` plus the optional displacement term.
+    pub cost: f64,
+    /// Bounding box (min, max) of the path's cells, for change detection.
+    pub(crate) bbox: (Cell, Cell),
+}
+
+impl Edge {
+    /// The path oriented to start at `start` (one of the endpoints); `None` if
+    /// `start` is not an endpoint.
+    pub fn path_from(&self, start: NodeId) -> Option<Vec<Point2<f64>>> {
+        if start == self.from {
+            Some(self.path.clone())
+        } else if start == self.to {
+            Some(self.path.iter().rev().copied().collect())
+        } else {
+            None
+        }
+    }
+}
+
+/// Canonical (sorted) key of an undirected pair.
+pub(crate) fn pair(a: NodeId, b: NodeId) -> (NodeId, NodeId) {
+    if a <= b { (a, b) } else { (b, a) }
+}
+
+/// The global frontier decision graph.
+///
+/// Nodes: the robot, the optional home and the frontier nodes. An edge exists
+/// for every pair connected through the traversable grid; unreachable pairs
+/// have none. Obtained from [`crate::FrontierMap::frontier_graph`], which keeps
+/// it up to date incrementally.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct FrontierGraph {
+    pub(crate) robot: Option<AnchorNode>,
+    pub(crate) home: Option<AnchorNode>,
+    pub(crate) frontiers: BTreeMap<FrontierId, FrontierNode>,
+    #[serde(with = "edge_list")]
+    pub(crate) edges: FxHashMap<(NodeId, NodeId), Edge>,
+}
+
+impl FrontierGraph {
+    /// Frontier nodes, in increasing id order.
+    pub fn nodes(&self) -> impl ExactSizeIterator<Item = &FrontierNode> + '_ {
+        self.frontiers.values()
+    }
+
+    /// Number of frontier nodes.
+    pub fn len(&self) -> usize {
+        self.frontiers.len()
+    }
+
+    /// Whether there is no frontier node.
+    pub fn is_empty(&self) -> bool {
+        self.frontiers.is_empty()
+    }
+
+    /// The frontier node with this id.
+    pub fn frontier(&self, id: FrontierId) -> Option<&FrontierNode> {
+        self.frontiers.get(&id)
+    }
+
+    /// The robot node (set by [`crate::FrontierMap::frontier_graph`]). Before
+    /// the first call it is a robot at the origin with no cell (no edges).
+    pub fn robot(&self) -> &AnchorNode {
+        static NONE: AnchorNode = AnchorNode {
+            position: Point2::new(0.0, 0.0),
+            cell: None,
+        };
+        self.robot.as_ref().unwrap_or(&NONE)
+    }
+
+    /// The home node, if enabled.
+    pub fn home(&self) -> Option<&AnchorNode> {
+        self.home.as_ref()
+    }
+
+    /// Nominal position of a node (robot/home pose, frontier viewpoint).
+    pub fn position(&self, id: NodeId) -> Option<Point2<f64>> {
+        match id {
+            NodeId::Robot => self.robot.as_ref().map(|r| r.position),
+            NodeId::Home => self.home.as_ref().map(|h| h.position),
+            NodeId::Frontier(f) => self.frontiers.get(&f).map(|n| n.viewpoint),
+        }
+    }
+
+    /// All node ids: robot, home (if any), then frontiers by id.
+    pub fn node_ids(&self) -> impl Iterator<Item = NodeId> + '_ {
+        std::iter::once(NodeId::Robot)
+            .chain(self.home.as_ref().map(|_| NodeId::Home))
+            .chain(self.frontiers.keys().map(|&f| NodeId::Frontier(f)))
+    }
+
+    /// The edge between `a` and `b` (either order), or `None` when they are
+    /// not connected (or equal, or unknown).
+    ///
+    /// # Complexity
+    /// O(1) expected.
+    pub fn edge(&self, a: NodeId, b: NodeId) -> Option<&Edge> {
+        self.edges.get(&pair(a, b))
+    }
+
+    /// Cost of the edge between `a` and `b`, `None` when unreachable.
+    pub fn cost(&self, a: NodeId, b: NodeId) -> Option<f64> {
+        self.edge(a, b).map(|e| e.cost)
+    }
+
+    /// All edges (each undirected pair once, in arbitrary order).
+    pub fn edges(&self) -> impl Iterator<Item = &Edge> + '_ {
+        self.edges.values()
+    }
+
+    /// Number of edges.
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Exports G_F to petgraph: node weights are [`NodeId`]s (robot first,
+    /// then home, then frontiers by id), edge weights are costs. Also returns
+    /// the index of every node.
+    ///
+    /// # Complexity
+    /// O(V + E).
+    pub fn to_petgraph(&self) -> (UnGraph<NodeId, f64>, FxHashMap<NodeId, NodeIndex>) {
+        let mut g = UnGraph::with_capacity(self.frontiers.len() + 2, self.edges.len());
+        let mut index = FxHashMap::default();
+        for id in self.node_ids() {
+            index.insert(id, g.add_node(id));
+        }
+        let mut keys: Vec<_> = self.edges.keys().copied().collect();
+        keys.sort_unstable();
+        for k in keys {
+            if let (Some(&a), Some(&b)) = (index.get(&k.0), index.get(&k.1)) {
+                g.add_edge(a, b, self.edges[&k].cost);
+            }
+        }
+        (g, index)
+    }
+}
+
+/// Serialises the edge map as a list (JSON maps need string keys).
+mod edge_list {
+    use super::{Edge, NodeId, pair};
+    use rustc_hash::FxHashMap;
+    use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+    pub(super) fn serialize<S: Serializer>(
+        m: &FxHashMap<(NodeId, NodeId), Edge>,
+        s: S,
+    ) -> Result<S::Ok, S::Error> {
+        let mut v: Vec<&Edge> = m.values().collect();
+        v.sort_by_key(|e| (e.from, e.to));
+        v.serialize(s)
+    }
+
+    pub(super) fn deserialize<'de, D: Deserializer<'de>>(
+        d: D,
+    ) -> Result<FxHashMap<(NodeId, NodeId), Edge>, D::Error> {
+        let v = Vec::<Edge>::deserialize(d)?;
+        Ok(v.into_iter().map(|e| (pair(e.from, e.to), e)).collect())
+    }
+}

@@ -1,0 +1,99 @@
+//! Occupancy grid, incremental frontiers and the global frontier decision
+//! graph of SOR-Nav.
+//!
+//! SOR-Nav's explorer turns geometry into a decision graph
+//! G_F = ({v_r, v_h} ∪ V_F, E_F): the robot node v_r, an optional home node
+//! v_h at the initial pose, and graph-grounded frontier nodes V_F. Every edge
+//! stores an executable path and its traversal cost, so decisions reflect
+//! traversability, not Euclidean proximity.
+//!
+//! # Should I use this crate?
+//! Use it when a ground robot explores one floor from range data (depth
+//! camera or LiDAR) and you need frontiers *and* the true travel cost between
+//! them. It does not depend on any other sornav crate.
+//!
+//! # API themes
+//! * [`FrontierMap::update`]: integrate a scan (sensor origin + world
+//!   points) into the [`OccupancyGrid`] (clamped log-odds, obstacle height
+//!   band, 2D ray carving, incremental inflation by the robot radius) and
+//!   update the frontiers incrementally (FUEL-style).
+//! * [`FrontierMap::frontier_graph`]: bring G_F up to date for the robot's
+//!   pose and borrow it: [`FrontierGraph::nodes`], [`FrontierGraph::edge`],
+//!   [`FrontierGraph::robot`], [`FrontierGraph::home`],
+//!   [`FrontierGraph::to_petgraph`].
+//! * [`FrontierMap::path`]: an executable shortest path between two points.
+//!
+//! All inputs are validated: NaN/infinite or out-of-range coordinates give a
+//! [`FrontierError`], never a panic.
+//!
+//! # Example
+//! ```
+//! use nalgebra::{Point2, Point3};
+//! use sornav_frontier_graph::{FrontierMap, FrontierMapConfig, NodeId};
+//!
+//! let mut map = FrontierMap::new(FrontierMapConfig::default())?;
+//! // A 360-degree scan in a 6 m x 4 m room with an open doorway on the east wall.
+//! let origin = Point3::new(0.0, 0.0, 0.5);
+//! let mut points = Vec::new();
+//! for k in 0..720 {
+//!     let a = f64::from(k) * std::f64::consts::PI / 360.0;
+//!     let (c, s) = (a.cos(), a.sin());
+//!     // distance to the walls x = ±3, y = ±2
+//!     let tx = if c.abs() > 1e-9 { 3.0 / c.abs() } else { f64::INFINITY };
+//!     let ty = if s.abs() > 1e-9 { 2.0 / s.abs() } else { f64::INFINITY };
+//!     let t = tx.min(ty);
+//!     let hit = Point3::new(t * c, t * s, 0.5);
+//!     let in_door = tx < ty && c > 0.0 && hit.y.abs() < 0.5;
+//!     // Through the doorway the ray runs to the sensor's range.
+//!     points.push(if in_door { Point3::new(8.0 * c, 8.0 * s, 0.5) } else { hit });
+//! }
+//! map.update(&origin, &points)?;
+//! let graph = map.frontier_graph(&Point2::new(0.0, 0.0))?;
+//! assert!(!graph.is_empty());
+//! for f in graph.nodes() {
+//!     let edge = graph.edge(NodeId::Robot, NodeId::Frontier(f.id)).expect("reachable");
+//!     assert!(edge.cost >= (f.viewpoint - Point2::new(0.0, 0.0)).norm() - 0.1);
+//! }
+//! # Ok::<(), sornav_frontier_graph::FrontierError>(())
+//! ```
+//!
+//! # Algorithms
+//! * Grid: log-odds occupancy with clamping (Hornung et al., OctoMap, 2013),
+//!   ray traversal after Amanatides & Woo (1987), inflation as an
+//!   incrementally maintained thresholded distance transform (obstacle count
+//!   within the robot disk).
+//! * Frontiers: after FUEL (Zhou et al., RA-L 2021): re-test only cells an
+//!   update touched, re-segment only affected 8-connected components, split
+//!   by PCA, keep ids of unchanged segments.
+//! * Edges: exact 8-connected octile shortest paths without corner cutting,
+//!   by Dijkstra with a bucket queue (Dial 1969), one early-terminating search
+//!   per recomputed row, with sound change tests deciding which pairs to
+//!   recompute (see [`FrontierMap::frontier_graph`]); the result equals a
+//!   rebuild from scratch.
+//!
+//! # Performance
+//! On a 30 m x 30 m house at 0.05 m with 200 frontier nodes (see the crate
+//! README and `examples/bench_frontier_graph.rs`), an incremental update
+//! (scan + frontiers + graph) takes about 2.5 ms (p50); a full rebuild of all
+//! ~20 000 edges takes about 0.1-0.15 s on one core, versus 2.9 s for a naive
+//! rebuild (one full Dijkstra per node).
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+mod cell;
+mod config;
+mod error;
+mod frontier;
+mod graph;
+mod grid;
+mod map;
+mod raycast;
+mod search;
+
+pub use cell::{Cell, MAX_CELL_COORD, cell_center};
+pub use config::{FrontierConfig, FrontierMapConfig, GraphConfig, GridConfig};
+pub use error::FrontierError;
+pub use frontier::is_frontier_cell;
+pub use graph::{AnchorNode, Edge, FrontierGraph, FrontierId, FrontierNode, NodeId};
+pub use grid::{CellState, OccupancyGrid};
+pub use map::{FrontierMap, RefreshStats, UpdateStats, path_cells};

@@ -1,0 +1,690 @@
+//! [`FrontierMap`]: the grid, the frontiers and G_F, kept up to date together.
+
+use nalgebra::{Point2, Point3};
+use rustc_hash::{FxHashMap, FxHashSet};
+use serde::{Deserialize, Serialize};
+
+use crate::cell::cell_of;
+use crate::frontier::Detector;
+use crate::graph::pair;
+use crate::search::{Scratch, dijkstra, extract_path};
+use crate::{
+    AnchorNode, Cell, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMapConfig, NodeId,
+    OccupancyGrid,
+};
+
+/// Relative tolerance when deciding whether a new path may be shorter.
+const EPS: f64 = 1e-9;
+
+/// What one [`FrontierMap::update`] changed.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct UpdateStats {
+    /// Cells whose occupancy state changed.
+    pub cells_changed: usize,
+    /// Cells that became traversable.
+    pub cells_gained: usize,
+    /// Cells that stopped being traversable.
+    pub cells_lost: usize,
+    /// Frontier nodes created.
+    pub frontiers_added: usize,
+    /// Frontier nodes removed.
+    pub frontiers_removed: usize,
+}
+
+/// What one graph refresh ([`FrontierMap::frontier_graph`]) recomputed.
+#[derive(Debug, Clone, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RefreshStats {
+    /// Node pairs whose edge had to be recomputed.
+    pub pairs_recomputed: usize,
+    /// Shortest-path searches run (one per recomputed row).
+    pub rows_recomputed: usize,
+    /// Whether the lower-bound search from newly traversable cells ran.
+    pub gain_search: bool,
+}
+
+/// Changes accumulated since the last graph refresh.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+struct Pending {
+    gained: Vec<Cell>,
+    lost: Vec<Cell>,
+    added: FxHashSet<FrontierId>,
+    full: bool,
+}
+
+/// Occupancy grid + incremental frontiers + the frontier decision graph G_F.
+///
+/// Feed it scans with [`update`](Self::update), then ask for the graph at the
+/// robot's current pose with [`frontier_graph`](Self::frontier_graph). See the
+/// crate documentation for an example.
+///
+/// Serialisable (for checkpoints); deserialisation validates the data and
+/// rejects inconsistent files with an error.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(try_from = "MapData")]
+pub struct FrontierMap {
+    cfg: FrontierMapConfig,
+    grid: OccupancyGrid,
+    graph: FrontierGraph,
+    next_id: u64,
+    pending: Pending,
+    last_refresh: RefreshStats,
+    #[serde(skip)]
+    scratch: Scratch,
+}
+
+/// Unvalidated deserialised form of [`FrontierMap`].
+#[derive(Deserialize)]
+struct MapData {
+    cfg: FrontierMapConfig,
+    grid: OccupancyGrid,
+    graph: FrontierGraph,
+    next_id: u64,
+    pending: Pending,
+    last_refresh: RefreshStats,
+}
+
+impl TryFrom<MapData> for FrontierMap {
+    type Error = FrontierError;
+
+    fn try_from(d: MapData) -> Result<Self, FrontierError> {
+        d.cfg.validate()?;
+        let bad = |m: &str| Err(FrontierError::InvalidConfig(format!("malformed map: {m}")));
+        if d.grid.config() != &d.cfg.grid {
+            return bad("grid configuration differs from the map configuration");
+        }
+        for (id, node) in &d.graph.frontiers {
+            if node.id != *id || id.0 > d.next_id || node.cells.is_empty() {
+                return bad("inconsistent frontier node");
+            }
+            for c in &node.cells {
+                let ok = d
+                    .grid
+                    .index(*c)
+                    .is_some_and(|i| d.grid.frontier[i] && d.grid.segment[i] == id.0);
+                if !ok {
+                    return bad("frontier node cells disagree with the grid");
+                }
+            }
+        }
+        for e in d.graph.edges.values() {
+            if !e.cost.is_finite() || !e.length.is_finite() || e.path.is_empty() {
+                return bad("non-finite or empty edge");
+            }
+        }
+        Ok(Self {
+            cfg: d.cfg,
+            grid: d.grid,
+            graph: d.graph,
+            next_id: d.next_id,
+            pending: d.pending,
+            last_refresh: d.last_refresh,
+            scratch: Scratch::default(),
+        })
+    }
+}
+
+impl FrontierMap {
+    /// An empty map (everything unknown, no frontier).
+    ///
+    /// # Errors
+    /// [`FrontierError::InvalidConfig`] if `cfg` is invalid.
+    pub fn new(cfg: FrontierMapConfig) -> Result<Self, FrontierError> {
+        cfg.validate()?;
+        Ok(Self {
+            grid: OccupancyGrid::new(cfg.grid.clone())?,
+            cfg,
+            graph: FrontierGraph::default(),
+            next_id: 0,
+            pending: Pending::default(),
+            last_refresh: RefreshStats::default(),
+            scratch: Scratch::default(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &FrontierMapConfig {
+        &self.cfg
+    }
+
+    /// The occupancy / traversability grid.
+    pub fn grid(&self) -> &OccupancyGrid {
+        &self.grid
+    }
+
+    /// The graph as of the last [`frontier_graph`](Self::frontier_graph) call
+    /// (frontier nodes are always current; edges and robot as of that call).
+    pub fn graph(&self) -> &FrontierGraph {
+        &self.graph
+    }
+
+    /// Statistics of the last graph refresh.
+    pub fn last_refresh(&self) -> &RefreshStats {
+        &self.last_refresh
+    }
+
+    /// Every frontier cell (including those of segments dropped for being
+    /// smaller than [`crate::FrontierConfig::min_cells`]), in row-major order.
+    pub fn frontier_cells(&self) -> impl Iterator<Item = Cell> + '_ {
+        self.grid
+            .frontier
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| **f)
+            .map(|(i, _)| self.grid.cell_at(i))
+    }
+
+    /// Integrates one scan taken from sensor position `origin` (world, m).
+    ///
+    /// Sensor model, per return `p` (heights relative to
+    /// [`crate::GridConfig::floor_z`]):
+    /// * in the obstacle band `[step_height, robot_height]`, or a drop-off
+    ///   deeper than `drop_off_depth` below the floor: the cells on the 2D ray
+    ///   from the origin are misses, the return's cell a hit;
+    /// * a floor return (below `step_height`): the whole ray including the
+    ///   return's cell is a miss;
+    /// * above the robot: misses up to where the 3D ray leaves the robot's
+    ///   height band (nothing if the sensor itself is above it);
+    /// * beyond `max_range` (3D): misses up to the range, no hit.
+    ///
+    /// Each cell is updated once per scan (hit wins over miss), log-odds are
+    /// clamped. Then obstacle inflation, traversability and frontiers are
+    /// updated incrementally inside the touched region.
+    ///
+    /// # Errors
+    /// [`FrontierError::NonFinite`] / [`FrontierError::OutOfRange`] for bad
+    /// coordinates, [`FrontierError::GridTooLarge`] when the grid would exceed
+    /// its cell budget. On error nothing is modified.
+    ///
+    /// # Complexity
+    /// O(P · L + C · r² + A log A): P returns with rays of L cells, C cells
+    /// whose occupancy flips (robot radius r cells), A cells in frontier
+    /// components touched by the update.
+    pub fn update(
+        &mut self,
+        origin: &Point3<f64>,
+        points: &[Point3<f64>],
+    ) -> Result<UpdateStats, FrontierError> {
+        let delta = self.grid.integrate(origin, points)?;
+        let changes = Detector {
+            grid: &mut self.grid,
+            nodes: &mut self.graph.frontiers,
+            next_id: &mut self.next_id,
+            cfg: &self.cfg.frontier,
+        }
+        .update(&delta);
+        for id in &changes.removed {
+            self.pending.added.remove(id);
+        }
+        self.pending.added.extend(changes.added.iter().copied());
+        self.pending.gained.extend(delta.gained.iter().copied());
+        self.pending.lost.extend(delta.lost.iter().copied());
+        Ok(UpdateStats {
+            cells_changed: delta.state_changed.len(),
+            cells_gained: delta.gained.len(),
+            cells_lost: delta.lost.len(),
+            frontiers_added: changes.added.len(),
+            frontiers_removed: changes.removed.len(),
+        })
+    }
+
+    /// Recomputes the frontier segmentation from scratch and marks every edge
+    /// for recomputation at the next [`frontier_graph`](Self::frontier_graph)
+    /// call (used as the non-incremental reference and by benchmarks).
+    ///
+    /// # Complexity
+    /// O(N + F log F) for N grid cells and F frontier cells; the next
+    /// refresh then costs one search per node.
+    pub fn rebuild(&mut self) {
+        let changes = Detector {
+            grid: &mut self.grid,
+            nodes: &mut self.graph.frontiers,
+            next_id: &mut self.next_id,
+            cfg: &self.cfg.frontier,
+        }
+        .rebuild();
+        self.graph.edges.clear();
+        self.pending = Pending {
+            full: true,
+            added: changes.added.into_iter().collect(),
+            ..Pending::default()
+        };
+    }
+
+    /// Snaps a position to the nearest traversable cell within the snap radius
+    /// (ties broken by cell order).
+    ///
+    /// # Complexity
+    /// O((r / resolution)²) for snap radius r.
+    fn snap(&self, p: &Point2<f64>) -> Option<Cell> {
+        let res = self.grid.resolution();
+        let c = cell_of(p, res, "pose", 0).ok()?;
+        if self.grid.is_traversable(c) {
+            return Some(c);
+        }
+        // Bounded by GraphConfig::validate (<= 10 m).
+        #[allow(clippy::cast_possible_truncation)]
+        let r = (self.cfg.graph.snap_radius / res).ceil() as i32;
+        let mut best: Option<(f64, Cell)> = None;
+        for dy in -r..=r {
+            for dx in -r..=r {
+                let n = c.offset(dx, dy);
+                if !self.grid.is_traversable(n) {
+                    continue;
+                }
+                let d = (self.grid.cell_center(n) - p).norm();
+                if d <= self.cfg.graph.snap_radius + 1e-12
+                    && best.is_none_or(|(bd, bc)| (d, n) < (bd, bc))
+                {
+                    best = Some((d, n));
+                }
+            }
+        }
+        best.map(|b| b.1)
+    }
+
+    fn check_pose(p: &Point2<f64>, what: &'static str, res: f64) -> Result<(), FrontierError> {
+        cell_of(p, res, what, 0).map(|_| ())
+    }
+
+    /// The source cell and displacement of a node.
+    fn anchor(&self, id: NodeId) -> Option<(Cell, f64)> {
+        let g = &self.graph;
+        match id {
+            NodeId::Robot => g.robot.as_ref().and_then(|a| {
+                a.cell
+                    .map(|c| (c, (self.grid.cell_center(c) - a.position).norm()))
+            }),
+            NodeId::Home => g.home.as_ref().and_then(|a| {
+                a.cell
+                    .map(|c| (c, (self.grid.cell_center(c) - a.position).norm()))
+            }),
+            NodeId::Frontier(f) => g
+                .frontiers
+                .get(&f)
+                .map(|n| (n.viewpoint_cell, (n.viewpoint - n.centroid).norm())),
+        }
+    }
+
+    /// Brings G_F up to date for the robot at `robot` and returns it.
+    ///
+    /// The home node is placed at the first pose ever given (when enabled).
+    /// Only *rows* that may have changed are recomputed, each with one
+    /// early-terminating Dijkstra search over the traversable grid:
+    /// * rows of new nodes, and of the robot/home when their cell moved;
+    /// * pairs whose stored path uses a cell that stopped being traversable,
+    ///   either on the path or as a side cell of a diagonal step (diagonal
+    ///   moves need both straight neighbours);
+    /// * pairs `(a, b)` that the newly traversable cells might shorten: a new
+    ///   path either crosses a newly traversable cell or takes a diagonal step
+    ///   one of them enabled, so it visits the set `G` of those cells and
+    ///   their traversable 8-neighbours. One multi-source search from `G`
+    ///   gives `d(a, G)` for every node, and the pair is recomputed only if
+    ///   `d(a, G) + d(G, b) < length(a, b)` (a sound lower bound).
+    ///
+    /// Flagged pairs are covered greedily by rows (the node with most flagged
+    /// pairs first), and each search stops once its row's flagged targets are
+    /// settled. The result equals a rebuild from scratch (costs exactly;
+    /// paths up to ties).
+    ///
+    /// # Errors
+    /// [`FrontierError::NonFinite`] / [`FrontierError::OutOfRange`] for a bad
+    /// pose; nothing is modified then.
+    ///
+    /// # Complexity
+    /// O(R · N) for R recomputed rows over N traversable cells, plus
+    /// O(V² + E · L) for the change tests (V nodes, E edges of L path cells
+    /// near lost cells).
+    pub fn frontier_graph(&mut self, robot: &Point2<f64>) -> Result<&FrontierGraph, FrontierError> {
+        let res = self.grid.resolution();
+        Self::check_pose(robot, "pose", res)?;
+        let mut pending = std::mem::take(&mut self.pending);
+        let mut stats = RefreshStats::default();
+
+        // Anchors.
+        if self.cfg.graph.home && self.graph.home.is_none() {
+            self.graph.home = Some(AnchorNode {
+                position: *robot,
+                cell: None,
+            });
+        }
+        let mut fresh: Vec<NodeId> = Vec::new();
+        let robot_cell = self.snap(robot);
+        let old_robot = self.graph.robot.replace(AnchorNode {
+            position: *robot,
+            cell: robot_cell,
+        });
+        if old_robot.as_ref().and_then(|a| a.cell) != robot_cell || old_robot.is_none() {
+            fresh.push(NodeId::Robot);
+        }
+        if let Some(home) = self.graph.home.as_ref().map(|h| h.position) {
+            let hc = self.snap(&home);
+            let h = self
+                .graph
+                .home
+                .as_mut()
+                .map(|h| std::mem::replace(&mut h.cell, hc));
+            if h.flatten() != hc {
+                fresh.push(NodeId::Home);
+            }
+        }
+        fresh.extend(
+            pending
+                .added
+                .iter()
+                .filter(|f| self.graph.frontiers.contains_key(f))
+                .map(|&f| NodeId::Frontier(f)),
+        );
+
+        // Current nodes with their source cells.
+        let nodes: Vec<(NodeId, Cell, f64)> = self
+            .graph
+            .node_ids()
+            .filter_map(|id| self.anchor(id).map(|(c, d)| (id, c, d)))
+            .collect();
+        let slot: FxHashMap<NodeId, usize> =
+            nodes.iter().enumerate().map(|(k, n)| (n.0, k)).collect();
+
+        // Drop edges of vanished or moved nodes.
+        let fresh_set: FxHashSet<NodeId> = fresh.iter().copied().collect();
+        self.graph.edges.retain(|&(a, b), _| {
+            slot.contains_key(&a)
+                && slot.contains_key(&b)
+                && !fresh_set.contains(&a)
+                && !fresh_set.contains(&b)
+        });
+
+        // Flag pairs.
+        let v = nodes.len();
+        let mut flagged = vec![false; v * v];
+        let flag = |a: usize, b: usize, f: &mut Vec<bool>| {
+            if a != b {
+                f[a * v + b] = true;
+                f[b * v + a] = true;
+            }
+        };
+        if pending.full {
+            for a in 0..v {
+                for b in a + 1..v {
+                    flag(a, b, &mut flagged);
+                }
+            }
+        } else {
+            for id in &fresh {
+                if let Some(&a) = slot.get(id) {
+                    for b in 0..v {
+                        flag(a, b, &mut flagged);
+                    }
+                }
+            }
+            // Paths crossing lost cells.
+            pending.lost.sort_unstable();
+            pending.lost.dedup();
+            if !pending.lost.is_empty() {
+                let lost: FxHashSet<Cell> = pending.lost.iter().copied().collect();
+                let (mut lo, mut hi) = (pending.lost[0], pending.lost[0]);
+                for c in &pending.lost {
+                    lo = Cell::new(lo.x.min(c.x), lo.y.min(c.y));
+                    hi = Cell::new(hi.x.max(c.x), hi.y.max(c.y));
+                }
+                for (key, e) in &self.graph.edges {
+                    // Side cells of diagonal steps lie within one cell of the bbox.
+                    let (elo, ehi) = (e.bbox.0.offset(-1, -1), e.bbox.1.offset(1, 1));
+                    if elo.x > hi.x || elo.y > hi.y || ehi.x < lo.x || ehi.y < lo.y {
+                        continue;
+                    }
+                    if path_crosses(e, &lost, res) {
+                        flag(slot[&key.0], slot[&key.1], &mut flagged);
+                    }
+                }
+            }
+            // Pairs a newly traversable region might shorten.
+            // A new path either crosses a gained cell or takes a diagonal step
+            // that a gained side cell enabled; both endpoints of such a step
+            // are 8-neighbours of the gained cell. So sources = gained cells
+            // and their traversable 8-neighbours.
+            let mut gained: Vec<usize> = Vec::with_capacity(pending.gained.len() * 3);
+            for &c in &pending.gained {
+                for (dx, dy) in crate::search::DIRS.iter().copied().chain([(0, 0)]) {
+                    if let Some(i) = self.grid.index(c.offset(dx, dy))
+                        && self.grid.trav_at(i)
+                    {
+                        gained.push(i);
+                    }
+                }
+            }
+            gained.sort_unstable();
+            gained.dedup();
+            if !gained.is_empty() && v > 1 {
+                stats.gain_search = true;
+                let targets: Vec<usize> =
+                    nodes.iter().filter_map(|n| self.grid.index(n.1)).collect();
+                dijkstra(&self.grid, &mut self.scratch, &gained, &targets);
+                let lb: Vec<Option<f64>> = nodes
+                    .iter()
+                    .map(|n| {
+                        self.grid
+                            .index(n.1)
+                            .and_then(|i| self.scratch.settled(i))
+                            .map(|d| d * res)
+                    })
+                    .collect();
+                for a in 0..v {
+                    let Some(la) = lb[a] else { continue };
+                    for b in a + 1..v {
+                        let Some(lb_b) = lb[b] else { continue };
+                        let old = self
+                            .graph
+                            .edges
+                            .get(&pair(nodes[a].0, nodes[b].0))
+                            .map_or(f64::INFINITY, |e| e.length);
+                        if la + lb_b < old * (1.0 - EPS) - EPS {
+                            flag(a, b, &mut flagged);
+                        }
+                    }
+                }
+            }
+        }
+
+        // Cover flagged pairs with rows, greedily.
+        let mut count: Vec<usize> = (0..v)
+            .map(|a| flagged[a * v..(a + 1) * v].iter().filter(|f| **f).count())
+            .collect();
+        let w = self.cfg.graph.displacement_weight;
+        // Ties (all pairs flagged after a rebuild) are broken by a sweep along
+        // the principal axis of the node cells: rows processed late then only
+        // need targets close by, which early termination exploits.
+        let sweep = sweep_rank(&nodes);
+        while let Some((a, &ca)) = count
+            .iter()
+            .enumerate()
+            .max_by_key(|(k, c)| (**c, usize::MAX - sweep[*k]))
+        {
+            if ca == 0 {
+                break;
+            }
+            let row: Vec<usize> = (0..v).filter(|&b| flagged[a * v + b]).collect();
+            for &b in &row {
+                flagged[a * v + b] = false;
+                flagged[b * v + a] = false;
+                count[b] -= 1;
+            }
+            count[a] = 0;
+            stats.rows_recomputed += 1;
+            stats.pairs_recomputed += row.len();
+            let (ida, ca_cell, da) = nodes[a];
+            let Some(src) = self.grid.index(ca_cell) else {
+                for &b in &row {
+                    self.graph.edges.remove(&pair(ida, nodes[b].0));
+                }
+                continue;
+            };
+            let targets: Vec<usize> = row
+                .iter()
+                .filter_map(|&b| self.grid.index(nodes[b].1))
+                .collect();
+            dijkstra(&self.grid, &mut self.scratch, &[src], &targets);
+            for &b in &row {
+                let (idb, cb, db) = nodes[b];
+                let key = pair(ida, idb);
+                let found = self.grid.index(cb).and_then(|t| {
+                    let d = self.scratch.settled(t)?;
+                    let (path, bbox) = extract_path(&self.grid, &self.scratch, t)?;
+                    Some((d * res, path, bbox))
+                });
+                match found {
+                    Some((length, mut path, bbox)) => {
+                        if key.0 != ida {
+                            path.reverse();
+                        }
+                        self.graph.edges.insert(
+                            key,
+                            Edge {
+                                from: key.0,
+                                to: key.1,
+                                path,
+                                length,
+                                cost: length + w * (da + db),
+                                bbox,
+                            },
+                        );
+                    }
+                    None => {
+                        self.graph.edges.remove(&key);
+                    }
+                }
+            }
+        }
+        // The robot's displacement changes with its pose even on the same cell.
+        if w > 0.0 {
+            for n in &nodes {
+                if n.0 != NodeId::Robot {
+                    continue;
+                }
+                for (other, _, dother) in &nodes {
+                    if let Some(e) = self.graph.edges.get_mut(&pair(NodeId::Robot, *other)) {
+                        e.cost = e.length + w * (n.2 + dother);
+                    }
+                }
+            }
+        }
+        pending.gained.clear();
+        pending.lost.clear();
+        pending.added.clear();
+        pending.full = false;
+        self.pending = pending;
+        self.last_refresh = stats;
+        Ok(&self.graph)
+    }
+
+    /// Shortest executable path between two world points, each snapped to
+    /// the nearest traversable cell within [`crate::GraphConfig::snap_radius`].
+    /// `Ok(None)` when either point has no traversable cell nearby or they
+    /// are not connected. The returned edge has `from = to = NodeId::Robot`
+    /// (it is not part of G_F); `cost == length`.
+    ///
+    /// # Errors
+    /// [`FrontierError::NonFinite`] / [`FrontierError::OutOfRange`].
+    ///
+    /// # Complexity
+    /// O(N) for N traversable cells closer to `from` than `to` is.
+    pub fn path(
+        &mut self,
+        from: &Point2<f64>,
+        to: &Point2<f64>,
+    ) -> Result<Option<Edge>, FrontierError> {
+        let res = self.grid.resolution();
+        Self::check_pose(from, "from", res)?;
+        Self::check_pose(to, "to", res)?;
+        let (Some(a), Some(b)) = (self.snap(from), self.snap(to)) else {
+            return Ok(None);
+        };
+        let (Some(ia), Some(ib)) = (self.grid.index(a), self.grid.index(b)) else {
+            return Ok(None);
+        };
+        dijkstra(&self.grid, &mut self.scratch, &[ia], &[ib]);
+        let Some(d) = self.scratch.settled(ib) else {
+            return Ok(None);
+        };
+        Ok(
+            extract_path(&self.grid, &self.scratch, ib).map(|(path, bbox)| Edge {
+                from: NodeId::Robot,
+                to: NodeId::Robot,
+                path,
+                length: d * res,
+                cost: d * res,
+                bbox,
+            }),
+        )
+    }
+}
+
+/// Rank of every node along the principal axis of the node cells.
+fn sweep_rank(nodes: &[(NodeId, Cell, f64)]) -> Vec<usize> {
+    let n = nodes.len().max(1) as f64;
+    let (mx, my) = nodes.iter().fold((0.0, 0.0), |(x, y), c| {
+        (x + f64::from(c.1.x) / n, y + f64::from(c.1.y) / n)
+    });
+    let (mut sxx, mut sxy, mut syy) = (0.0, 0.0, 0.0);
+    for c in nodes {
+        let (dx, dy) = (f64::from(c.1.x) - mx, f64::from(c.1.y) - my);
+        sxx += dx * dx;
+        sxy += dx * dy;
+        syy += dy * dy;
+    }
+    let theta = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let (ax, ay) = (theta.cos(), theta.sin());
+    let mut order: Vec<usize> = (0..nodes.len()).collect();
+    let key = |k: usize| f64::from(nodes[k].1.x) * ax + f64::from(nodes[k].1.y) * ay;
+    order.sort_by(|&a, &b| key(a).total_cmp(&key(b)).then(a.cmp(&b)));
+    let mut rank = vec![0; nodes.len()];
+    for (r, k) in order.into_iter().enumerate() {
+        rank[k] = r;
+    }
+    rank
+}
+
+/// Whether the path of `e` depends on any cell in `cells`: a cell on the
+/// path, or a side cell of a diagonal step (diagonal moves require both
+/// straight neighbours, no corner cutting).
+fn path_crosses(e: &Edge, cells: &FxHashSet<Cell>, res: f64) -> bool {
+    let mut prev: Option<Cell> = None;
+    for c in path_cells(&e.path, res) {
+        if cells.contains(&c) {
+            return true;
+        }
+        if let Some(p) = prev {
+            let (dx, dy) = (c.x - p.x, c.y - p.y);
+            if dx != 0
+                && dy != 0
+                && (cells.contains(&p.offset(dx, 0)) || cells.contains(&p.offset(0, dy)))
+            {
+                return true;
+            }
+        }
+        prev = Some(c);
+    }
+    false
+}
+
+/// Every cell of a path polyline as stored in [`Edge::path`] (consecutive
+/// points differ by a multiple of one of the 8 grid directions), in order.
+///
+/// # Complexity
+/// O(L) for a path of L cells (lazy iterator).
+pub fn path_cells(path: &[Point2<f64>], resolution: f64) -> impl Iterator<Item = Cell> + '_ {
+    let to_cell = move |p: &Point2<f64>| {
+        // Path points are cell centres produced by this crate.
+        #[allow(clippy::cast_possible_truncation)]
+        Cell::new(
+            (p.x / resolution).floor() as i32,
+            (p.y / resolution).floor() as i32,
+        )
+    };
+    let first = path.first().map(to_cell);
+    first.into_iter().chain(path.windows(2).flat_map(move |w| {
+        let (a, b) = (to_cell(&w[0]), to_cell(&w[1]));
+        let (dx, dy) = ((b.x - a.x).signum(), (b.y - a.y).signum());
+        let n = (b.x - a.x).abs().max((b.y - a.y).abs());
+        (1..=n).map(move |k| a.offset(dx * k, dy * k))
+    }))
+}

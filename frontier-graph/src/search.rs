@@ -1,0 +1,245 @@
+//! Exact shortest paths on the traversable grid: Dijkstra with a bucket
+//! queue (Dial's algorithm), 8-connected, octile costs, no corner cutting.
+
+use nalgebra::Point2;
+use std::f64::consts::SQRT_2;
+
+use crate::{Cell, OccupancyGrid};
+
+/// The 8 moves: 4 straight then 4 diagonal.
+pub(crate) const DIRS: [(i32, i32); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (1, -1),
+    (-1, 1),
+    (-1, -1),
+];
+const COST: [f64; 8] = [1.0, 1.0, 1.0, 1.0, SQRT_2, SQRT_2, SQRT_2, SQRT_2];
+const NO_PARENT: u8 = u8::MAX;
+/// Bucket width is the smallest move cost (1 cell): every label in the lowest
+/// non-empty bucket is final, and the largest move (√2) spans at most 3
+/// buckets, so 4 circular buckets suffice.
+const NB: usize = 4;
+
+/// Reusable search buffers (grid-sized; generation stamps avoid clearing).
+///
+/// The per-cell state is a separate byte array: the most frequent test of a
+/// search ("is this neighbour settled already?") then reads a compact array
+/// that stays in cache, and the distances are touched only for cells on the
+/// wavefront. A byte holds `2g` (reached) or `2g + 1` (settled) for the
+/// search generation `g` in 1..=127; the array is cleared once every 127
+/// searches.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Scratch {
+    dist: Vec<f64>,
+    state: Vec<u8>,
+    /// Index into [`DIRS`] of the move that reached the cell.
+    parent: Vec<u8>,
+    generation: u8,
+    buckets: [Vec<u32>; NB],
+}
+
+impl Scratch {
+    fn prepare(&mut self, n: usize) {
+        if self.state.len() != n {
+            self.dist = vec![0.0; n];
+            self.state = vec![0; n];
+            self.parent = vec![NO_PARENT; n];
+            self.generation = 0;
+        }
+        if self.generation >= 127 {
+            self.state.fill(0);
+            self.generation = 0;
+        }
+        self.generation += 1;
+        for b in &mut self.buckets {
+            b.clear();
+        }
+    }
+
+    /// Final distance (cells) of dense index `i` after [`dijkstra`], if settled.
+    pub(crate) fn settled(&self, i: usize) -> Option<f64> {
+        (self.state.get(i) == Some(&(2 * self.generation + 1))).then(|| self.dist[i])
+    }
+
+    fn parent(&self, i: usize) -> u8 {
+        self.parent[i]
+    }
+}
+
+/// Single- or multi-source Dijkstra over the traversable cells of `grid`.
+///
+/// Sources that are not traversable are ignored. When `targets` is non-empty,
+/// the search stops as soon as all traversable targets are settled. Results
+/// are read with [`Scratch::settled`] and [`extract_path`].
+///
+/// Relies on the grid invariant that no traversable cell lies on the outer
+/// ring of the allocated area (the grid keeps a margin around every cell an
+/// update touches), so neighbour indices never wrap to another row; indices
+/// are still bounds-checked.
+///
+/// # Complexity
+/// O(N) for N traversable cells within the distance of the farthest target
+/// (bucket queue: O(1) per insertion and removal).
+pub(crate) fn dijkstra(
+    grid: &OccupancyGrid,
+    s: &mut Scratch,
+    sources: &[usize],
+    targets: &[usize],
+) {
+    let n = grid.cell_count();
+    s.prepare(n);
+    let g = s.generation;
+    let (reached, settled) = (2 * g, 2 * g + 1);
+    let trav = grid.trav_layer();
+    let w = grid.dims().0 as isize;
+    let off: [isize; 8] = [1, -1, w, -w, w + 1, 1 - w, w - 1, -w - 1];
+    let Scratch {
+        dist,
+        state,
+        parent,
+        buckets,
+        ..
+    } = s;
+    // Targets are checked in list order at bucket boundaries (each target
+    // once when settled, amortised O(1) per bucket), so settling a cell does
+    // not need a per-cell target mark.
+    let pending: Vec<usize> = targets
+        .iter()
+        .copied()
+        .filter(|&t| t < n && trav[t])
+        .collect();
+    let stop_early = !pending.is_empty();
+    let mut next_target = 0usize;
+    let mut queued = 0usize;
+    for &src in sources {
+        if src < n && trav[src] && state[src] != reached {
+            state[src] = reached;
+            dist[src] = 0.0;
+            parent[src] = NO_PARENT;
+            buckets[0].push(src as u32);
+            queued += 1;
+        }
+    }
+    let wu = w as usize;
+    let mut k = 0usize;
+    while queued > 0 {
+        let b = k % NB;
+        if buckets[b].is_empty() {
+            k += 1;
+            continue;
+        }
+        let items = std::mem::take(&mut buckets[b]);
+        for &iu in &items {
+            queued -= 1;
+            let i = iu as usize;
+            if state[i] == settled {
+                continue;
+            }
+            state[i] = settled;
+            let d = dist[i];
+            // The 3 x 3 neighbourhood as three row slices (3 bounds checks
+            // instead of 8); traversable cells never touch the grid border.
+            let (Some(up), Some(mid), Some(down)) = (
+                i.checked_add(wu).and_then(|a| trav.get(a - 1..=a + 1)),
+                trav.get(i.wrapping_sub(1)..=i + 1),
+                i.checked_sub(wu)
+                    .and_then(|a| trav.get(a.wrapping_sub(1)..=a + 1)),
+            ) else {
+                continue;
+            };
+            let (e, wst, n, s8) = (mid[2], mid[0], up[1], down[1]);
+            // Diagonals need both straight neighbours (no corner cutting).
+            let ok = [
+                e,
+                wst,
+                n,
+                s8,
+                e && n && up[2],
+                e && s8 && down[2],
+                wst && n && up[0],
+                wst && s8 && down[0],
+            ];
+            for k8 in 0..8 {
+                if !ok[k8] {
+                    continue;
+                }
+                let j = i.wrapping_add_signed(off[k8]);
+                let sj = state[j];
+                if sj == settled {
+                    continue;
+                }
+                let nd = d + COST[k8];
+                if sj != reached || nd < dist[j] {
+                    state[j] = reached;
+                    dist[j] = nd;
+                    parent[j] = k8 as u8;
+                    // Finite, non-negative, far below usize::MAX.
+                    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+                    let nb = (nd as usize) % NB;
+                    buckets[nb].push(j as u32);
+                    queued += 1;
+                }
+            }
+        }
+        buckets[b] = items;
+        buckets[b].clear();
+        k += 1;
+        if stop_early {
+            while next_target < pending.len() && state[pending[next_target]] == settled {
+                next_target += 1;
+            }
+            if next_target == pending.len() {
+                return;
+            }
+        }
+    }
+}
+
+/// A compressed path and the bounding box (min, max) of its cells.
+pub(crate) type ExtractedPath = (Vec<Point2<f64>>, (Cell, Cell));
+
+/// Path (compressed to direction changes, in world coordinates) from the
+/// search source to the settled dense index `target`, with its cell bounding
+/// box. `None` if `target` was not settled.
+///
+/// # Complexity
+/// O(L) for a path of L cells.
+pub(crate) fn extract_path(
+    grid: &OccupancyGrid,
+    s: &Scratch,
+    target: usize,
+) -> Option<ExtractedPath> {
+    s.settled(target)?;
+    let mut cell = grid.cell_at(target);
+    let (mut lo, mut hi) = (cell, cell);
+    let mut rev = vec![cell];
+    let mut last_dir = NO_PARENT;
+    let mut i = target;
+    loop {
+        let p = s.parent(i);
+        if p == NO_PARENT {
+            if *rev.last().unwrap_or(&cell) != cell {
+                rev.push(cell);
+            }
+            break;
+        }
+        if p != last_dir && last_dir != NO_PARENT {
+            rev.push(cell);
+        }
+        last_dir = p;
+        let (dx, dy) = DIRS[p as usize];
+        cell = cell.offset(-dx, -dy);
+        lo = Cell::new(lo.x.min(cell.x), lo.y.min(cell.y));
+        hi = Cell::new(hi.x.max(cell.x), hi.y.max(cell.y));
+        i = grid.index(cell)?;
+    }
+    rev.reverse();
+    Some((
+        rev.into_iter().map(|c| grid.cell_center(c)).collect(),
+        (lo, hi),
+    ))
+}

@@ -1,0 +1,312 @@
+//! Property tests on random box worlds: frontier definition, reference
+//! Dijkstra, executable paths, incremental == rebuild, triangle inequality.
+
+mod common;
+
+use common::{World, explore, reference_dijkstra};
+use nalgebra::Point2;
+use proptest::prelude::*;
+use sornav_frontier_graph::{
+    Cell, CellState, FrontierMap, FrontierMapConfig, NodeId, is_frontier_cell, path_cells,
+};
+use std::collections::{BTreeMap, BTreeSet};
+
+fn config() -> FrontierMapConfig {
+    let mut cfg = FrontierMapConfig::default();
+    cfg.grid.resolution = 0.1;
+    cfg.grid.max_range = 2.5;
+    cfg.grid.robot_radius = 0.15;
+    cfg.frontier.max_extent = 1.0;
+    cfg.frontier.min_cells = 3;
+    cfg
+}
+
+/// A 6 m x 6 m room with outer walls and random boxes, plus origins that lie
+/// in free space.
+fn world_strategy() -> impl Strategy<Value = (World, Vec<Point2<f64>>)> {
+    let boxes = prop::collection::vec((0.3f64..5.0, 0.3f64..5.0, 0.2f64..1.5, 0.1f64..1.0), 0..6);
+    let origins = prop::collection::vec((0.4f64..5.6, 0.4f64..5.6), 2..5);
+    (boxes, origins).prop_map(|(bs, os)| {
+        let mut boxes = vec![
+            [-0.1, -0.1, 6.1, 0.0],
+            [-0.1, 6.0, 6.1, 6.1],
+            [-0.1, -0.1, 0.0, 6.1],
+            [6.0, -0.1, 6.1, 6.1],
+        ];
+        for (x, y, w, h) in bs {
+            boxes.push([x, y, x + w, y + h]);
+        }
+        let world = World { boxes };
+        let origins = os
+            .into_iter()
+            .map(|(x, y)| Point2::new(x, y))
+            .filter(|p| {
+                // keep origins with clearance
+                (0..16).all(|k| {
+                    let a = f64::from(k) * std::f64::consts::TAU / 16.0;
+                    !world.blocked(p + nalgebra::Vector2::new(a.cos(), a.sin()) * 0.25)
+                }) && !world.blocked(*p)
+            })
+            .collect();
+        (world, origins)
+    })
+}
+
+fn all_cells(map: &FrontierMap) -> Vec<Cell> {
+    let Some((lo, hi)) = map.grid().bounds() else {
+        return Vec::new();
+    };
+    let mut v = Vec::new();
+    for y in lo.y - 1..=hi.y + 1 {
+        for x in lo.x - 1..=hi.x + 1 {
+            v.push(Cell::new(x, y));
+        }
+    }
+    v
+}
+
+/// Edge costs keyed by the nodes' cell sets (ids differ between maps).
+/// Differences between the two cost maps (first few), empty when equal.
+fn cost_diff(a: &FrontierMap, b: &FrontierMap) -> Vec<String> {
+    let (ca, cb) = (costs_by_cells(a), costs_by_cells(b));
+    let keys: BTreeSet<_> = ca.keys().chain(cb.keys()).cloned().collect();
+    keys.into_iter()
+        .filter(|k| ca.get(k) != cb.get(k))
+        .take(4)
+        .map(|k| {
+            format!(
+                "{:?}..{:?}: {:?} vs {:?}",
+                k.0.first(),
+                k.1.first(),
+                ca.get(&k),
+                cb.get(&k)
+            )
+        })
+        .collect()
+}
+
+fn costs_by_cells(map: &FrontierMap) -> BTreeMap<(Vec<Cell>, Vec<Cell>), u64> {
+    let g = map.graph();
+    let key = |id: NodeId| -> Vec<Cell> {
+        match id {
+            NodeId::Frontier(f) => g.frontier(f).unwrap().cells.clone(),
+            NodeId::Robot => vec![Cell::new(i32::MIN, 0)],
+            NodeId::Home => vec![Cell::new(i32::MIN, 1)],
+        }
+    };
+    g.edges()
+        .map(|e| {
+            let (a, b) = (key(e.from), key(e.to));
+            let k = if a <= b { (a, b) } else { (b, a) };
+            (k, (e.cost * 1e6).round() as u64)
+        })
+        .collect()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    #[test]
+    fn grid_frontiers_and_graph_are_correct((world, origins) in world_strategy()) {
+        prop_assume!(!origins.is_empty());
+        let mut map = FrontierMap::new(config()).unwrap();
+        explore(&mut map, &world, &origins, 180);
+        let grid = map.grid();
+        let res = grid.resolution();
+
+        // Traversability = free and no occupied cell within the robot radius.
+        let r = map.config().grid.robot_radius;
+        let ri = (r / res).ceil() as i32;
+        for c in all_cells(&map) {
+            let mut clear = grid.state(c) == CellState::Free;
+            for dy in -ri..=ri {
+                for dx in -ri..=ri {
+                    if f64::from(dx * dx + dy * dy) * res * res <= r * r + 1e-9
+                        && grid.state(c.offset(dx, dy)) == CellState::Occupied {
+                        clear = false;
+                    }
+                }
+            }
+            prop_assert_eq!(grid.is_traversable(c), clear, "cell {:?}", c);
+        }
+
+        // Frontier cells: exactly the cells satisfying the definition.
+        let reported: BTreeSet<Cell> = map.frontier_cells().collect();
+        let expected: BTreeSet<Cell> = all_cells(&map)
+            .into_iter()
+            .filter(|&c| {
+                grid.is_traversable(c)
+                    && [(1, 0), (-1, 0), (0, 1), (0, -1)]
+                        .iter()
+                        .any(|&(dx, dy)| grid.state(c.offset(dx, dy)) == CellState::Unknown)
+            })
+            .collect();
+        prop_assert_eq!(&reported, &expected);
+        for &c in &reported {
+            prop_assert!(is_frontier_cell(grid, c));
+        }
+
+        // Nodes: disjoint frontier cells, extent within the limit (or a
+        // single cell), viewpoint in the segment.
+        let g = map.graph();
+        let mut seen = BTreeSet::new();
+        for n in g.nodes() {
+            prop_assert!(n.cells.len() >= map.config().frontier.min_cells);
+            prop_assert!(n.extent <= map.config().frontier.max_extent + 1e-9);
+            prop_assert!(n.cells.contains(&n.viewpoint_cell));
+            for c in &n.cells {
+                prop_assert!(reported.contains(c));
+                prop_assert!(seen.insert(*c), "cell in two nodes");
+            }
+        }
+
+        // Edges vs reference Dijkstra; paths executable.
+        let ids: Vec<NodeId> = g.node_ids().collect();
+        let cell_of = |id: NodeId| -> Option<Cell> {
+            match id {
+                NodeId::Robot => g.robot().cell,
+                NodeId::Home => g.home().and_then(|h| h.cell),
+                NodeId::Frontier(f) => g.frontier(f).map(|n| n.viewpoint_cell),
+            }
+        };
+        for (k, &a) in ids.iter().enumerate() {
+            let Some(ca) = cell_of(a) else {
+                for &b in &ids { prop_assert!(g.edge(a, b).is_none()); }
+                continue;
+            };
+            let reference = reference_dijkstra(grid, ca);
+            for &b in &ids[k + 1..] {
+                let expect = cell_of(b).and_then(|cb| reference.get(&cb).copied());
+                let got = g.edge(a, b);
+                match (expect, got) {
+                    (None, None) => {}
+                    (Some(d), Some(e)) => {
+                        prop_assert!((e.cost - d).abs() < 1e-6, "{:?}-{:?}: {} vs {}", a, b, e.cost, d);
+                        let oriented = e.path_from(a).unwrap();
+                        prop_assert_eq!(grid.cell_of(&oriented[0]).unwrap(), ca);
+                        prop_assert_eq!(grid.cell_of(oriented.last().unwrap()).unwrap(), cell_of(b).unwrap());
+                        let cells: Vec<Cell> = path_cells(&e.path, res).collect();
+                        for w in cells.windows(2) {
+                            let (dx, dy) = (w[1].x - w[0].x, w[1].y - w[0].y);
+                            prop_assert!(dx.abs() <= 1 && dy.abs() <= 1 && (dx, dy) != (0, 0));
+                            if dx != 0 && dy != 0 {
+                                prop_assert!(grid.is_traversable(w[0].offset(dx, 0)));
+                                prop_assert!(grid.is_traversable(w[0].offset(0, dy)));
+                            }
+                        }
+                        for c in cells {
+                            prop_assert!(grid.is_traversable(c), "path cell {:?} blocked", c);
+                        }
+                    }
+                    (x, y) => prop_assert!(false, "{:?}-{:?}: reference {:?}, graph {:?}", a, b, x, y.map(|e| e.cost)),
+                }
+            }
+        }
+
+        // Triangle inequality through the graph.
+        for &a in &ids {
+            for &b in &ids {
+                for &c in &ids {
+                    if let (Some(ab), Some(bc), Some(ac)) = (g.cost(a, b), g.cost(b, c), g.cost(a, c)) {
+                        prop_assert!(ac <= ab + bc + 1e-6);
+                    }
+                }
+            }
+        }
+
+        // Incremental == rebuild from scratch.
+        let mut rebuilt = map.clone();
+        rebuilt.rebuild();
+        let robot = *origins.last().unwrap();
+        rebuilt.frontier_graph(&robot).unwrap();
+        let cells_inc: BTreeSet<Vec<Cell>> = map.graph().nodes().map(|n| n.cells.clone()).collect();
+        let cells_reb: BTreeSet<Vec<Cell>> = rebuilt.graph().nodes().map(|n| n.cells.clone()).collect();
+        prop_assert_eq!(cells_inc, cells_reb);
+        let diff = cost_diff(&map, &rebuilt);
+        prop_assert!(diff.is_empty(), "{:?}", diff);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// After every step of a random exploration (random robot poses, home on
+    /// or off, displacement weight on or off), the incrementally maintained
+    /// map equals a rebuild from scratch.
+    #[test]
+    fn incremental_equals_rebuild_after_every_step(
+        (world, origins) in world_strategy(),
+        home in any::<bool>(),
+        weighted in any::<bool>(),
+        poses in prop::collection::vec((0.3f64..5.7, 0.3f64..5.7), 4),
+    ) {
+        prop_assume!(!origins.is_empty());
+        let mut cfg = config();
+        cfg.graph.home = home;
+        cfg.graph.displacement_weight = if weighted { 0.5 } else { 0.0 };
+        let mut map = FrontierMap::new(cfg).unwrap();
+        for (k, o) in origins.iter().enumerate() {
+            let pts = world.scan(*o, 120, map.config().grid.max_range);
+            map.update(&nalgebra::Point3::new(o.x, o.y, 0.5), &pts).unwrap();
+            let (px, py) = poses[k % poses.len()];
+            let robot = Point2::new(px, py);
+            map.frontier_graph(&robot).unwrap();
+            let mut rebuilt = map.clone();
+            rebuilt.rebuild();
+            rebuilt.frontier_graph(&robot).unwrap();
+            let a: BTreeSet<Vec<Cell>> = map.graph().nodes().map(|n| n.cells.clone()).collect();
+            let b: BTreeSet<Vec<Cell>> = rebuilt.graph().nodes().map(|n| n.cells.clone()).collect();
+            prop_assert_eq!(a, b);
+            let diff = cost_diff(&map, &rebuilt);
+            prop_assert!(diff.is_empty(), "step {}: {:?}", k, diff);
+        }
+    }
+
+    /// The path query on random (non-inflated) maps equals a reference
+    /// Dijkstra, and its paths are executable.
+    #[test]
+    fn path_query_matches_reference(
+        hits in prop::collection::vec((-2.0f64..2.0, -2.0f64..2.0), 0..80),
+        floor in prop::collection::vec((-2.0f64..2.0, -2.0f64..2.0), 1..120),
+        queries in prop::collection::vec((any::<prop::sample::Index>(), any::<prop::sample::Index>()), 1..8),
+    ) {
+        let mut cfg = config();
+        cfg.grid.robot_radius = 0.0;
+        cfg.grid.max_range = 10.0;
+        let mut map = FrontierMap::new(cfg).unwrap();
+        let o = nalgebra::Point3::new(0.05, 0.05, 0.5);
+        let mut pts: Vec<_> = floor.iter().map(|&(x, y)| nalgebra::Point3::new(x, y, 0.05)).collect();
+        map.update(&o, &pts).unwrap();
+        pts = hits.iter().map(|&(x, y)| nalgebra::Point3::new(x, y, 0.5)).collect();
+        // Obstacles from a different origin so they do not erase each other.
+        map.update(&nalgebra::Point3::new(2.5, 2.5, 0.5), &pts).unwrap();
+        let res = map.grid().resolution();
+        // Query between floor returns (free unless an obstacle landed there).
+        let mut checked = 0;
+        for (qa, qb) in queries {
+            let ((ax, ay), (bx, by)) = (*qa.get(&floor), *qb.get(&floor));
+            let (a, b) = (Point2::new(ax, ay), Point2::new(bx, by));
+            let (ca, cb) = (map.grid().cell_of(&a).unwrap(), map.grid().cell_of(&b).unwrap());
+            if !map.grid().is_traversable(ca) || !map.grid().is_traversable(cb) {
+                continue;
+            }
+            let expect = reference_dijkstra(map.grid(), ca).get(&cb).copied();
+            let got = map.path(&a, &b).unwrap();
+            checked += 1;
+            match (expect, got) {
+                (None, None) => {}
+                (Some(d), Some(e)) => {
+                    prop_assert!((e.cost - d).abs() < 1e-6);
+                    let cells: Vec<Cell> = path_cells(&e.path, res).collect();
+                    prop_assert_eq!(cells[0], ca);
+                    prop_assert_eq!(*cells.last().unwrap(), cb);
+                    prop_assert!(cells.iter().all(|c| map.grid().is_traversable(*c)));
+                }
+                (x, y) => prop_assert!(false, "reference {:?}, query {:?}", x, y.map(|e| e.cost)),
+            }
+        }
+        // Floor returns stay free unless an obstacle lands on them: the test
+        // is not vacuous.
+        prop_assert!(checked > 0 || !hits.is_empty());
+    }
+}
