@@ -1,0 +1,135 @@
+//! Read-only queries over the object clusters (as of the last
+//! [`SemanticMap::update_clusters`]). These are what the semantic contexts
+//! S_r (around the robot) and S_k (around a candidate region) are built from.
+
+use nalgebra::Point3;
+use serde::{Deserialize, Serialize};
+
+use crate::cluster::{ClusterId, ObjectCluster};
+use crate::key::VoxelKey;
+use crate::label::LabelId;
+use crate::map::SemanticMap;
+
+/// A combined cluster filter: every set criterion must hold.
+///
+/// # Examples
+/// ```
+/// use nalgebra::Point3;
+/// use sornav_semantic_map::{ClusterQuery, LabelId};
+/// // S_r: clusters with at least N_min = 10 voxels within 10 m of the robot.
+/// let q = ClusterQuery::default()
+///     .min_support(10)
+///     .within(Point3::new(1.0, 2.0, 0.0), 10.0);
+/// let toilets = q.clone().label(LabelId(14));
+/// assert_eq!(toilets.label, Some(LabelId(14)));
+/// ```
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ClusterQuery {
+    /// Only clusters with this label.
+    pub label: Option<LabelId>,
+    /// Only clusters with `support >= min_support`.
+    pub min_support: usize,
+    /// Only clusters whose centre lies within this horizontal (x, y)
+    /// distance of the point (z is ignored).
+    pub within: Option<(Point3<f64>, f64)>,
+}
+
+impl ClusterQuery {
+    /// Restricts to `label`.
+    pub fn label(mut self, label: LabelId) -> Self {
+        self.label = Some(label);
+        self
+    }
+
+    /// Restricts to `support >= n`.
+    pub fn min_support(mut self, n: usize) -> Self {
+        self.min_support = n;
+        self
+    }
+
+    /// Restricts to centres within horizontal distance `radius` of `point`.
+    pub fn within(mut self, point: Point3<f64>, radius: f64) -> Self {
+        self.within = Some((point, radius));
+        self
+    }
+
+    /// Whether `c` satisfies every criterion. A non-finite point or radius
+    /// matches nothing.
+    pub fn matches(&self, c: &ObjectCluster) -> bool {
+        if self.label.is_some_and(|l| l != c.label) || c.support < self.min_support {
+            return false;
+        }
+        match &self.within {
+            None => true,
+            Some((p, r)) => horizontal_distance(p, &c.centre) <= *r,
+        }
+    }
+}
+
+/// Distance between the (x, y) projections of two points.
+pub fn horizontal_distance(a: &Point3<f64>, b: &Point3<f64>) -> f64 {
+    (a.x - b.x).hypot(a.y - b.y)
+}
+
+impl SemanticMap {
+    /// All clusters in id order.
+    pub fn clusters(&self) -> impl Iterator<Item = &ObjectCluster> + '_ {
+        self.clusters.entries.values().map(|e| &e.cluster)
+    }
+
+    /// Number of clusters.
+    pub fn cluster_count(&self) -> usize {
+        self.clusters.entries.len()
+    }
+
+    /// The cluster with id `id`.
+    ///
+    /// # Complexity
+    /// O(log C) for C clusters.
+    pub fn cluster(&self, id: ClusterId) -> Option<&ObjectCluster> {
+        self.clusters.entries.get(&id).map(|e| &e.cluster)
+    }
+
+    /// The member voxels of cluster `id`, in no particular order.
+    pub fn cluster_voxels(&self, id: ClusterId) -> Option<&[VoxelKey]> {
+        self.clusters.entries.get(&id).map(|e| e.voxels.as_slice())
+    }
+
+    /// The cluster voxel `key` belongs to.
+    ///
+    /// # Complexity
+    /// O(1) expected.
+    pub fn cluster_at(&self, key: &VoxelKey) -> Option<ClusterId> {
+        self.clusters.assignment.get(key).copied()
+    }
+
+    /// Clusters with label `label`, id order. O(C).
+    pub fn clusters_with_label(&self, label: LabelId) -> impl Iterator<Item = &ObjectCluster> + '_ {
+        self.clusters().filter(move |c| c.label == label)
+    }
+
+    /// Clusters with `support >= n`, id order. O(C).
+    pub fn clusters_with_support(&self, n: usize) -> impl Iterator<Item = &ObjectCluster> + '_ {
+        self.clusters().filter(move |c| c.support >= n)
+    }
+
+    /// Clusters whose centre lies within horizontal distance `radius` of
+    /// `point` (z ignored), id order. O(C).
+    pub fn clusters_within(
+        &self,
+        point: Point3<f64>,
+        radius: f64,
+    ) -> impl Iterator<Item = &ObjectCluster> + '_ {
+        self.clusters()
+            .filter(move |c| horizontal_distance(&point, &c.centre) <= radius)
+    }
+
+    /// Clusters matching every criterion of `query`, id order.
+    ///
+    /// # Complexity
+    /// O(C) for C clusters (object clusters number in the hundreds at
+    /// most, so a linear scan beats maintaining a spatial index).
+    pub fn query(&self, query: &ClusterQuery) -> Vec<&ObjectCluster> {
+        self.clusters().filter(|c| query.matches(c)).collect()
+    }
+}
