@@ -17,12 +17,69 @@ pub(crate) const DIRS: [(i32, i32); 8] = [
     (-1, 1),
     (-1, -1),
 ];
-const COST: [f64; 8] = [1.0, 1.0, 1.0, 1.0, SQRT_2, SQRT_2, SQRT_2, SQRT_2];
 const NO_PARENT: u8 = u8::MAX;
 /// Bucket width is the smallest move cost (1 cell): every label in the lowest
 /// non-empty bucket is final, and the largest move (√2) spans at most 3
 /// buckets, so 4 circular buckets suffice.
 const NB: usize = 4;
+
+/// An exact path length `a + b√2` (a straight and b diagonal moves), packed
+/// into an unsigned integer: the straight count in the low half, the
+/// diagonal count in the high half.
+///
+/// Comparisons go through [`Label::value`], which evaluates `a + b√2` in
+/// `f64` from the integer counts. Distinct `(a, b)` have distinct lengths
+/// (√2 is irrational) that differ by at least about `1 / (2√2 · max(a, b))`,
+/// far above the `f64` evaluation error for counts below 2^32, so the order
+/// is exact and equal lengths are bit-identical (no accumulated rounding).
+trait Label: Copy {
+    /// Length 0.
+    const ZERO: Self;
+    /// The label one move further (`diag`: a diagonal move), `None` when a
+    /// count would overflow.
+    fn step(self, diag: bool) -> Option<Self>;
+    /// `a + b√2` in cells.
+    fn value(self) -> f64;
+}
+
+/// Counts below 2^16 each: the compact label (4 bytes per cell keeps the
+/// distance array of a large map in cache).
+impl Label for u32 {
+    const ZERO: Self = 0;
+    #[inline]
+    fn step(self, diag: bool) -> Option<Self> {
+        let (mask, inc) = if diag {
+            (0xFFFF_0000, 0x1_0000)
+        } else {
+            (0xFFFF, 1)
+        };
+        (self & mask != mask).then(|| self + inc)
+    }
+    #[inline]
+    fn value(self) -> f64 {
+        f64::from(self & 0xFFFF) + f64::from(self >> 16) * SQRT_2
+    }
+}
+
+/// Counts below 2^32 each: never overflows, since a shortest path visits
+/// distinct cells and a grid holds fewer than 2^32 of them.
+impl Label for u64 {
+    const ZERO: Self = 0;
+    #[inline]
+    fn step(self, diag: bool) -> Option<Self> {
+        let (mask, inc) = if diag {
+            (0xFFFF_FFFF_0000_0000, 1 << 32)
+        } else {
+            (0xFFFF_FFFF, 1)
+        };
+        (self & mask != mask).then(|| self + inc)
+    }
+    #[inline]
+    #[allow(clippy::cast_possible_truncation)] // Halves of a u64 fit in u32.
+    fn value(self) -> f64 {
+        f64::from(self as u32) + f64::from((self >> 32) as u32) * SQRT_2
+    }
+}
 
 /// Reusable search buffers (grid-sized; generation stamps avoid clearing).
 ///
@@ -31,10 +88,15 @@ const NB: usize = 4;
 /// that stays in cache, and the distances are touched only for cells on the
 /// wavefront. A byte holds `2g` (reached) or `2g + 1` (settled) for the
 /// search generation `g` in 1..=127; the array is cleared once every 127
-/// searches.
+/// searches. Distances are exact [`Label`]s: 4-byte labels first, and in the
+/// rare case a count exceeds 2^16 the search is rerun with 8-byte labels.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Scratch {
-    dist: Vec<f64>,
+    dist: Vec<u32>,
+    /// Allocated on the first overflow of `dist`.
+    wide_dist: Vec<u64>,
+    /// Whether the last search used `wide_dist`.
+    wide: bool,
     state: Vec<u8>,
     /// Index into [`DIRS`] of the move that reached the cell.
     parent: Vec<u8>,
@@ -45,7 +107,8 @@ pub(crate) struct Scratch {
 impl Scratch {
     fn prepare(&mut self, n: usize) {
         if self.state.len() != n {
-            self.dist = vec![0.0; n];
+            self.dist = vec![0; n];
+            self.wide_dist = Vec::new();
             self.state = vec![0; n];
             self.parent = vec![NO_PARENT; n];
             self.generation = 0;
@@ -62,7 +125,13 @@ impl Scratch {
 
     /// Final distance (cells) of dense index `i` after [`dijkstra`], if settled.
     pub(crate) fn settled(&self, i: usize) -> Option<f64> {
-        (self.state.get(i) == Some(&(2 * self.generation + 1))).then(|| self.dist[i])
+        (self.state.get(i) == Some(&(2 * self.generation + 1))).then(|| {
+            if self.wide {
+                self.wide_dist[i].value()
+            } else {
+                self.dist[i].value()
+            }
+        })
     }
 
     fn parent(&self, i: usize) -> u8 {
@@ -70,11 +139,15 @@ impl Scratch {
     }
 }
 
+/// A label count overflowed; the search must be rerun with wider labels.
+struct Overflow;
+
 /// Single- or multi-source Dijkstra over the traversable cells of `grid`.
 ///
 /// Sources that are not traversable are ignored. When `targets` is non-empty,
 /// the search stops as soon as all traversable targets are settled. Results
-/// are read with [`Scratch::settled`] and [`extract_path`].
+/// are read with [`Scratch::settled`] and [`extract_path`]. Distances are
+/// exact (see [`Label`]).
 ///
 /// Relies on the grid invariant that no traversable cell lies on the outer
 /// ring of the allocated area (the grid keeps a margin around every cell an
@@ -92,13 +165,36 @@ pub(crate) fn dijkstra(
 ) {
     let n = grid.cell_count();
     s.prepare(n);
+    s.wide = false;
+    let mut dist = std::mem::take(&mut s.dist);
+    let done = search(grid, s, &mut dist, sources, targets);
+    s.dist = dist;
+    if done.is_err() {
+        s.prepare(n);
+        s.wide = true;
+        let mut wide = std::mem::take(&mut s.wide_dist);
+        wide.resize(n, 0);
+        // Cannot overflow: counts stay below the number of grid cells < 2^32.
+        let _ = search(grid, s, &mut wide, sources, targets);
+        s.wide_dist = wide;
+    }
+}
+
+/// The search of [`dijkstra`] with labels of type `L`.
+fn search<L: Label>(
+    grid: &OccupancyGrid,
+    s: &mut Scratch,
+    dist: &mut [L],
+    sources: &[usize],
+    targets: &[usize],
+) -> Result<(), Overflow> {
+    let n = grid.cell_count();
     let g = s.generation;
     let (reached, settled) = (2 * g, 2 * g + 1);
     let trav = grid.trav_layer();
     let w = grid.dims().0 as isize;
     let off: [isize; 8] = [1, -1, w, -w, w + 1, 1 - w, w - 1, -w - 1];
     let Scratch {
-        dist,
         state,
         parent,
         buckets,
@@ -118,7 +214,7 @@ pub(crate) fn dijkstra(
     for &src in sources {
         if src < n && trav[src] && state[src] != reached {
             state[src] = reached;
-            dist[src] = 0.0;
+            dist[src] = L::ZERO;
             parent[src] = NO_PARENT;
             buckets[0].push(src as u32);
             queued += 1;
@@ -163,6 +259,9 @@ pub(crate) fn dijkstra(
                 wst && n && up[0],
                 wst && s8 && down[0],
             ];
+            let straight = d.step(false).ok_or(Overflow)?;
+            let diagonal = d.step(true).ok_or(Overflow)?;
+            let (vs, vd) = (straight.value(), diagonal.value());
             for k8 in 0..8 {
                 if !ok[k8] {
                     continue;
@@ -172,14 +271,18 @@ pub(crate) fn dijkstra(
                 if sj == settled {
                     continue;
                 }
-                let nd = d + COST[k8];
-                if sj != reached || nd < dist[j] {
+                let (nd, nv) = if k8 < 4 {
+                    (straight, vs)
+                } else {
+                    (diagonal, vd)
+                };
+                if sj != reached || nv < dist[j].value() {
                     state[j] = reached;
                     dist[j] = nd;
                     parent[j] = k8 as u8;
                     // Finite, non-negative, far below usize::MAX.
                     #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-                    let nb = (nd as usize) % NB;
+                    let nb = (nv as usize) % NB;
                     buckets[nb].push(j as u32);
                     queued += 1;
                 }
@@ -193,10 +296,11 @@ pub(crate) fn dijkstra(
                 next_target += 1;
             }
             if next_target == pending.len() {
-                return;
+                return Ok(());
             }
         }
     }
+    Ok(())
 }
 
 /// A compressed path and the bounding box (min, max) of its cells.
@@ -242,4 +346,58 @@ pub(crate) fn extract_path(
         rev.into_iter().map(|c| grid.cell_center(c)).collect(),
         (lo, hi),
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{FrontierMap, FrontierMapConfig};
+    use nalgebra::Point3;
+
+    #[test]
+    fn labels_detect_overflow_and_evaluate_exactly() {
+        let a = 0xFFFF_u32; // 65535 straight moves
+        assert_eq!(a.step(false), None);
+        assert_eq!(a.step(true).map(Label::value), Some(65535.0 + SQRT_2));
+        let b = 0xFFFF_0000_u32;
+        assert_eq!(b.step(true), None);
+        assert_eq!(b.step(false), Some(0xFFFF_0001));
+        assert_eq!(u64::from(u32::MAX).step(false), None);
+        let w = (7_u64 << 32) | 3;
+        assert!((w.value() - (3.0 + 7.0 * SQRT_2)).abs() < 1e-12);
+        // A near tie (99 vs 70√2 = 98.9949...) is ordered correctly.
+        assert!((70_u32 << 16).value() < 99_u32.value());
+    }
+
+    #[test]
+    fn compact_and_wide_labels_agree() {
+        let mut map = FrontierMap::new(FrontierMapConfig::default()).expect("config");
+        let origin = Point3::new(0.0, 0.0, 0.5);
+        let points: Vec<_> = (0..360)
+            .map(|k| {
+                let a = f64::from(k).to_radians();
+                let r = if k % 90 < 20 { 3.0 } else { 4.0 };
+                Point3::new(r * a.cos(), r * a.sin(), 0.5)
+            })
+            .collect();
+        map.update(&origin, &points).expect("scan");
+        let grid = map.grid();
+        let src = grid.index(Cell::new(0, 0)).expect("origin cell");
+        let n = grid.cell_count();
+        let mut s = Scratch::default();
+        s.prepare(n);
+        let mut compact = vec![0_u32; n];
+        assert!(search(grid, &mut s, &mut compact, &[src], &[]).is_ok());
+        let narrow: Vec<Option<f64>> = (0..n)
+            .map(|i| (s.state[i] == 2 * s.generation + 1).then(|| compact[i].value()))
+            .collect();
+        s.prepare(n);
+        let mut wide = vec![0_u64; n];
+        assert!(search(grid, &mut s, &mut wide, &[src], &[]).is_ok());
+        let wide: Vec<Option<f64>> = (0..n)
+            .map(|i| (s.state[i] == 2 * s.generation + 1).then(|| wide[i].value()))
+            .collect();
+        assert!(narrow.iter().filter(|d| d.is_some()).count() > 1000);
+        assert_eq!(narrow, wide);
+    }
 }
