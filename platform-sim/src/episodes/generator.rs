@@ -1,0 +1,320 @@
+//! ObjectNav episodes for any scene, following Habitat's dataset procedure.
+//!
+//! For each target category present in the scene:
+//! 1. **Goals** are all instances of the category.
+//! 2. **View points** of a goal are navigable poses within 1.0 m of the
+//!    object's bounds (distance from the agent's body, a vertical segment from
+//!    the feet to camera height, to the box), sampled on a 0.1 m grid, from
+//!    which the object is visible at camera height: at least one of 27 sample
+//!    points spread over the object's bounds is reached by an unobstructed ray
+//!    that first hits the object, within the camera's vertical field of view
+//!    of a level camera facing it. The view point faces the object's centre;
+//!    its `iou` is the fraction of sample rays that see the object. Goals
+//!    without view points are dropped, as in Habitat.
+//! 3. **Starts** are navigable poses drawn uniformly over the walkable area
+//!    (every span has the same area) whose geodesic distance to the nearest
+//!    view point lies in [1, 30] m. Episodes whose geodesic/euclidean ratio is
+//!    below 1.1 are kept only with probability 20 (r - 0.98)^2, habitat-lab's
+//!    filter against trivial straight-line episodes. The start heading is
+//!    uniform.
+//! 4. Each episode records the geodesic and euclidean distance to the closest
+//!    goal, its object id, and whether the start and that goal differ in
+//!    height by more than 0.5 m (`cross_floor`).
+//!
+//! Generation is deterministic for a seed.
+
+use nalgebra::{Point3, Vector3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::{Episode, ObjectGoal, ViewPoint};
+use crate::run::Simulator;
+use crate::{NavError, ObjectInstance};
+
+/// Parameters of the generator (Habitat's ObjectNav values by default).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct GeneratorConfig {
+    /// Target categories (HM3D's six by default); absent ones are skipped.
+    pub categories: Vec<String>,
+    /// Episodes per category.
+    pub episodes_per_category: usize,
+    /// Shortest allowed geodesic distance to the nearest view point (1 m).
+    pub min_geodesic: f64,
+    /// Longest allowed geodesic distance (30 m).
+    pub max_geodesic: f64,
+    /// Geodesic/euclidean ratio under which episodes are thinned out (1.1).
+    pub geodesic_to_euclid_ratio: f64,
+    /// Largest distance from a view point to the object's bounds (1 m).
+    pub view_point_radius: f64,
+    /// Grid spacing of view point candidates (0.1 m).
+    pub view_point_spacing: f64,
+    /// Height difference that makes an episode cross-floor (0.5 m).
+    pub cross_floor_dz: f64,
+    /// Start samples tried per episode before giving up on a category.
+    pub max_attempts: usize,
+    /// Seed.
+    pub seed: u64,
+}
+
+impl Default for GeneratorConfig {
+    fn default() -> Self {
+        GeneratorConfig {
+            categories: crate::category::HM3D_GOALS
+                .iter()
+                .map(|c| (*c).to_string())
+                .collect(),
+            episodes_per_category: 5,
+            min_geodesic: 1.0,
+            max_geodesic: 30.0,
+            geodesic_to_euclid_ratio: 1.1,
+            view_point_radius: 1.0,
+            view_point_spacing: 0.1,
+            cross_floor_dz: 0.5,
+            max_attempts: 5000,
+            seed: 0,
+        }
+    }
+}
+
+/// Errors of the generator.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum GenerateError {
+    /// A configuration value is out of range.
+    #[error("invalid generator configuration: {0}")]
+    Config(&'static str),
+    /// A geodesic query failed.
+    #[error(transparent)]
+    Nav(#[from] NavError),
+}
+
+impl GeneratorConfig {
+    /// Checks ranges.
+    ///
+    /// # Errors
+    /// [`GenerateError::Config`].
+    pub fn validate(&self) -> Result<(), GenerateError> {
+        if !(self.min_geodesic >= 0.0
+            && self.max_geodesic > self.min_geodesic
+            && self.max_geodesic.is_finite())
+        {
+            return Err(GenerateError::Config(
+                "need 0 <= min_geodesic < max_geodesic < inf",
+            ));
+        }
+        if !(self.view_point_radius > 0.0 && self.view_point_radius.is_finite()) {
+            return Err(GenerateError::Config("view_point_radius must be positive"));
+        }
+        if !(self.view_point_spacing > 0.0 && self.view_point_spacing.is_finite()) {
+            return Err(GenerateError::Config("view_point_spacing must be positive"));
+        }
+        if !(self.geodesic_to_euclid_ratio.is_finite()
+            && self.cross_floor_dz.is_finite()
+            && self.cross_floor_dz >= 0.0)
+        {
+            return Err(GenerateError::Config(
+                "geodesic_to_euclid_ratio and cross_floor_dz must be finite",
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Distance from an agent body (vertical segment `[feet.z, feet.z + height]`)
+/// to an object's bounds.
+pub fn body_distance(object: &ObjectInstance, feet: &Point3<f64>, height: f64) -> f64 {
+    let b = &object.bounds;
+    let dz = (b.min.z - (feet.z + height)).max(feet.z - b.max.z).max(0.0);
+    b.distance_xy(feet).hypot(dz)
+}
+
+/// View points of one object (see the module docs).
+///
+/// # Complexity
+/// O(C (h + 27 log T)) for C grid candidates around the object, h walking
+/// surfaces per column and T triangles.
+pub fn goal_view_points(
+    sim: &Simulator,
+    object: &ObjectInstance,
+    config: &GeneratorConfig,
+) -> Vec<ViewPoint> {
+    let nav = sim.nav();
+    let cam = sim.camera().config();
+    let cam_h = cam.mount_height;
+    let half_vfov = cam.vfov_deg().to_radians() / 2.0;
+    let b = &object.bounds;
+    if b.is_empty() {
+        return Vec::new();
+    }
+    let r = config.view_point_radius;
+    let step = config.view_point_spacing;
+    // Sample points over the object's bounds.
+    let fr = [1.0 / 6.0, 0.5, 5.0 / 6.0];
+    let mut targets = Vec::with_capacity(27);
+    for fx in fr {
+        for fy in fr {
+            for fz in fr {
+                let e = b.extents();
+                targets.push(b.min + Vector3::new(e.x * fx, e.y * fy, e.z * fz));
+            }
+        }
+    }
+    let centre = b.center();
+    let nx = ((b.max.x - b.min.x + 2.0 * r) / step).floor() as usize + 1;
+    let ny = ((b.max.y - b.min.y + 2.0 * r) / step).floor() as usize + 1;
+    let mut out = Vec::new();
+    for i in 0..nx {
+        for j in 0..ny {
+            let (x, y) = (b.min.x - r + i as f64 * step, b.min.y - r + j as f64 * step);
+            for h in nav.heights_at(x, y) {
+                let feet = Point3::new(x, y, h);
+                if body_distance(object, &feet, cam_h) > r || !nav.is_navigable(&feet) {
+                    continue;
+                }
+                let eye = Point3::new(x, y, h + cam_h);
+                let seen = targets
+                    .iter()
+                    .filter(|t| visible(sim, object.id, &eye, t, half_vfov))
+                    .count();
+                if seen > 0 {
+                    out.push(ViewPoint {
+                        position: feet,
+                        yaw: (centre.y - y).atan2(centre.x - x),
+                        iou: Some(seen as f64 / targets.len() as f64),
+                    });
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Whether the ray from `eye` to `target` first hits instance `id` and lies
+/// within the vertical field of view of a level camera.
+fn visible(
+    sim: &Simulator,
+    id: u32,
+    eye: &Point3<f64>,
+    target: &Point3<f64>,
+    half_vfov: f64,
+) -> bool {
+    let d = target - eye;
+    if d.z.atan2(d.xy().norm()).abs() > half_vfov {
+        return false;
+    }
+    let o = [eye.x as f32, eye.y as f32, eye.z as f32];
+    let dir = [d.x as f32, d.y as f32, d.z as f32];
+    sim.camera()
+        .bvh()
+        .intersect(o, dir, 0.0, 1.0 + 1e-4)
+        .is_some_and(|h| h.payload == id)
+}
+
+/// Generates episodes for every configured category present in the scene
+/// (see the module docs). Episode ids are `"<index>"`, the scene id is the
+/// scene's name.
+///
+/// # Errors
+/// [`GenerateError::Config`] for an invalid configuration.
+///
+/// # Complexity
+/// Per category: view points (see [`goal_view_points`]) plus one geodesic
+/// field per goal, O(G S log S), plus O(attempts) start samples.
+pub fn generate_episodes(
+    sim: &Simulator,
+    config: &GeneratorConfig,
+) -> Result<Vec<Episode>, GenerateError> {
+    config.validate()?;
+    let nav = sim.nav();
+    let scene = sim.scene();
+    let mut episodes = Vec::new();
+    if nav.span_count() == 0 {
+        return Ok(episodes);
+    }
+    for category in &config.categories {
+        let goals: Vec<(ObjectGoal, &ObjectInstance)> = scene
+            .objects_of(category)
+            .map(|o| {
+                let g = ObjectGoal {
+                    object_id: u64::from(o.id),
+                    object_name: Some(format!("{}_{}", o.category, o.id)),
+                    category: o.category.clone(),
+                    position: o.bounds.center(),
+                    view_points: goal_view_points(sim, o, config),
+                };
+                (g, o)
+            })
+            .filter(|(g, _)| !g.view_points.is_empty())
+            .collect();
+        if goals.is_empty() {
+            continue;
+        }
+        let all_vps: Vec<Point3<f64>> = goals
+            .iter()
+            .flat_map(|(g, _)| g.view_points.iter().map(|v| v.position))
+            .collect();
+        let field = nav.geodesic_field(&all_vps)?;
+        let per_goal: Vec<_> = goals
+            .iter()
+            .map(|(g, _)| {
+                nav.geodesic_field(&g.view_points.iter().map(|v| v.position).collect::<Vec<_>>())
+            })
+            .collect::<Result<_, _>>()?;
+        let seed = category
+            .bytes()
+            .fold(config.seed, |h, b| h.rotate_left(7) ^ u64::from(b))
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15);
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let goal_list: Vec<ObjectGoal> = goals.iter().map(|(g, _)| g.clone()).collect();
+        let mut made = 0;
+        let mut attempts = 0;
+        while made < config.episodes_per_category
+            && attempts < config.max_attempts * config.episodes_per_category
+        {
+            attempts += 1;
+            let s = rng.random_range(0..nav.span_count()) as u32;
+            let start = nav.span_center(s);
+            let d = field.span_distance(s);
+            if !(d >= config.min_geodesic && d <= config.max_geodesic) {
+                continue;
+            }
+            // Closest goal by geodesic distance.
+            let (gi, _) = per_goal
+                .iter()
+                .enumerate()
+                .map(|(i, f)| (i, f.span_distance(s)))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .unwrap_or((0, d));
+            let closest = &goals[gi].0;
+            let euclid = (closest.position - start).norm();
+            let ratio = d / euclid.max(1e-9);
+            if ratio < config.geodesic_to_euclid_ratio {
+                let keep = 20.0 * (ratio - 0.98).powi(2);
+                if !rng.random_bool(keep.clamp(0.0, 1.0)) {
+                    continue;
+                }
+            }
+            let dz = closest
+                .view_points
+                .iter()
+                .map(|v| (v.position.z - start.z).abs())
+                .fold(f64::INFINITY, f64::min);
+            let yaw = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+            episodes.push(Episode {
+                episode_id: episodes.len().to_string(),
+                scene_id: scene.name().to_string(),
+                start_position: start,
+                start_yaw: yaw,
+                object_category: category.clone(),
+                goals: goal_list.clone(),
+                geodesic_distance: Some(d),
+                euclidean_distance: Some(euclid),
+                closest_goal_object_id: Some(closest.object_id),
+                cross_floor: Some(dz > config.cross_floor_dz),
+            });
+            made += 1;
+        }
+    }
+    Ok(episodes)
+}

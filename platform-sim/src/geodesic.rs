@@ -1,0 +1,204 @@
+//! Geodesic distance on the walkable height field.
+//!
+//! Distances are shortest paths over the span graph of a [`NavMesh`]: each
+//! span connects to its 4 neighbours and to diagonal neighbours reachable by
+//! both orthogonal routes (octile moves); a move costs the 3-D distance between
+//! span centres, so geodesic distance is never shorter than the straight line.
+//! A query point off a span centre adds its straight-line offset to the
+//! snapped span (and two points over the same span are at straight-line
+//! distance), which keeps d(a, a) = 0, symmetry and the triangle inequality.
+//!
+//! Algorithm: Dijkstra (1959) with a binary heap, multi-source for goal sets.
+
+use std::collections::BinaryHeap;
+
+use nalgebra::Point3;
+use serde::{Deserialize, Serialize};
+
+use crate::NavError;
+use crate::navmesh::{HeapItem, NavMesh, SpanId};
+
+/// Horizontal search radius used to snap query points that are not exactly
+/// over a walkable span (0.5 m).
+pub const SNAP_RADIUS: f64 = 0.5;
+
+/// Distances from a set of goal points to every span of a [`NavMesh`].
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct GeodesicField {
+    dist: Vec<f64>,
+    /// Goal points snapped to spans: (span, offset of the goal from the span centre, goal).
+    goals: Vec<(SpanId, Point3<f64>)>,
+}
+
+impl GeodesicField {
+    /// Geodesic distance from `p` to the nearest goal (`f64::INFINITY` when unreachable).
+    ///
+    /// # Errors
+    /// [`NavError::NonFinite`] or [`NavError::NotNavigable`] when `p` cannot be
+    /// snapped to the walkable surface.
+    ///
+    /// # Complexity
+    /// O(1) after snapping.
+    pub fn distance(&self, nav: &NavMesh, p: &Point3<f64>) -> Result<f64, NavError> {
+        let s = locate(nav, p)?;
+        let c = nav.span_center(s);
+        let mut d = (p - c).norm() + self.dist[s as usize];
+        for (gs, g) in &self.goals {
+            if *gs == s {
+                d = d.min((p - g).norm());
+            }
+        }
+        Ok(d)
+    }
+
+    /// Distance stored for span `s` (from its centre).
+    pub fn span_distance(&self, s: SpanId) -> f64 {
+        self.dist.get(s as usize).copied().unwrap_or(f64::INFINITY)
+    }
+
+    /// Per-span distances, indexed by [`SpanId`].
+    pub fn span_distances(&self) -> &[f64] {
+        &self.dist
+    }
+}
+
+fn locate(nav: &NavMesh, p: &Point3<f64>) -> Result<SpanId, NavError> {
+    if !p.coords.iter().all(|c| c.is_finite()) {
+        return Err(NavError::NonFinite);
+    }
+    nav.nearest_span(p, SNAP_RADIUS)
+        .ok_or(NavError::NotNavigable {
+            x: p.x,
+            y: p.y,
+            z: p.z,
+        })
+}
+
+fn dijkstra(
+    nav: &NavMesh,
+    sources: &[(SpanId, f64)],
+    target: Option<SpanId>,
+) -> (Vec<f64>, Vec<u32>) {
+    let n = nav.span_count();
+    let mut dist = vec![f64::INFINITY; n];
+    let mut parent = vec![u32::MAX; n];
+    let mut heap = BinaryHeap::new();
+    for &(s, d0) in sources {
+        if d0 < dist[s as usize] {
+            dist[s as usize] = d0;
+            heap.push(HeapItem(d0, s));
+        }
+    }
+    while let Some(HeapItem(d, s)) = heap.pop() {
+        if d > dist[s as usize] {
+            continue;
+        }
+        if target == Some(s) {
+            break;
+        }
+        for (m, w) in nav.moves_3d(s as usize) {
+            let nd = d + w;
+            if nd < dist[m] {
+                dist[m] = nd;
+                parent[m] = s;
+                heap.push(HeapItem(nd, m as u32));
+            }
+        }
+    }
+    (dist, parent)
+}
+
+impl NavMesh {
+    /// Multi-goal geodesic distance field. Goals farther than [`SNAP_RADIUS`]
+    /// from the walkable surface are ignored; at least one must snap.
+    ///
+    /// # Errors
+    /// [`NavError::NoGoals`] when no goal lies on (or near) the walkable surface.
+    ///
+    /// # Complexity
+    /// O(S log S) for S spans.
+    pub fn geodesic_field(&self, goals: &[Point3<f64>]) -> Result<GeodesicField, NavError> {
+        let mut snapped = Vec::new();
+        let mut sources = Vec::new();
+        for g in goals {
+            if let Ok(s) = locate(self, g) {
+                snapped.push((s, *g));
+                sources.push((s, (g - self.span_center(s)).norm()));
+            }
+        }
+        if sources.is_empty() {
+            return Err(NavError::NoGoals);
+        }
+        let (dist, _) = dijkstra(self, &sources, None);
+        Ok(GeodesicField {
+            dist,
+            goals: snapped,
+        })
+    }
+
+    /// Geodesic distance between two points (`f64::INFINITY` when they lie on
+    /// different islands).
+    ///
+    /// # Errors
+    /// [`NavError`] when either point cannot be snapped to the walkable surface.
+    ///
+    /// # Complexity
+    /// O(S log S) worst case (Dijkstra stopped at the target).
+    pub fn distance(&self, a: &Point3<f64>, b: &Point3<f64>) -> Result<f64, NavError> {
+        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
+        if sa == sb {
+            return Ok((a - b).norm());
+        }
+        if self.spans()[sa as usize].region != self.spans()[sb as usize].region {
+            return Ok(f64::INFINITY);
+        }
+        let (ca, cb) = (self.span_center(sa), self.span_center(sb));
+        let (dist, _) = dijkstra(self, &[(sa, 0.0)], Some(sb));
+        Ok((a - ca).norm() + dist[sb as usize] + (b - cb).norm())
+    }
+
+    /// Shortest path from `a` to `b` as a polyline of span centres (starting
+    /// with `a`, ending with `b`), or `None` when unreachable.
+    ///
+    /// # Errors
+    /// [`NavError`] when either point cannot be snapped to the walkable surface.
+    ///
+    /// # Complexity
+    /// O(S log S) worst case.
+    pub fn path(
+        &self,
+        a: &Point3<f64>,
+        b: &Point3<f64>,
+    ) -> Result<Option<Vec<Point3<f64>>>, NavError> {
+        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
+        if sa == sb {
+            return Ok(Some(vec![*a, *b]));
+        }
+        if self.spans()[sa as usize].region != self.spans()[sb as usize].region {
+            return Ok(None);
+        }
+        let (dist, parent) = dijkstra(self, &[(sa, 0.0)], Some(sb));
+        if !dist[sb as usize].is_finite() {
+            return Ok(None);
+        }
+        let mut rev = vec![*b];
+        let mut s = sb;
+        while s != sa {
+            rev.push(self.span_center(s));
+            s = parent[s as usize];
+        }
+        rev.push(self.span_center(sa));
+        rev.push(*a);
+        rev.reverse();
+        Ok(Some(rev))
+    }
+
+    /// True when some walkable path connects `a` and `b`.
+    ///
+    /// # Errors
+    /// [`NavError`] when either point cannot be snapped.
+    pub fn connected(&self, a: &Point3<f64>, b: &Point3<f64>) -> Result<bool, NavError> {
+        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
+        Ok(self.spans()[sa as usize].region == self.spans()[sb as usize].region)
+    }
+}

@@ -1,0 +1,240 @@
+//! glTF 2.0 / GLB importer for users' own scenes.
+//!
+//! Node names carry the labels: `category` or `category_instance`
+//! (`chair_3`, `tv_monitor_1`, `wall`). Every distinct labelled node becomes
+//! one instance; unnamed nodes inherit the label of their closest named
+//! ancestor (or `object`). Labels are mapped to the ObjectNav vocabulary with
+//! [`crate::category::objectnav_category`] when possible; `wall`, `floor`,
+//! `ceiling`, `door`, `window` and `stairs` become structure instances.
+//!
+//! glTF is y-up; scene coordinates are z-up: `(x, y, z)_scene = (x, -z, y)_gltf`.
+//! Only triangle primitives are read; images are never decoded. Buffers come
+//! from the GLB binary chunk or from files next to the `.gltf` (data URIs are
+//! rejected with a typed error).
+
+use std::path::Path;
+
+use nalgebra::{Matrix4, Point3};
+
+use crate::SceneError;
+use crate::category::{normalise, objectnav_category};
+use crate::geometry::MeshBuilder;
+use crate::scene::{InstanceKind, Level, Scene};
+
+fn err(node: Option<&str>, message: impl Into<String>) -> SceneError {
+    SceneError::Gltf {
+        node: node.map(str::to_string),
+        message: message.into(),
+    }
+}
+
+/// Splits `chair_3` into ("chair", Some(3)); `tv_monitor` stays whole.
+pub fn parse_label(name: &str) -> (String, Option<u32>) {
+    if let Some((head, tail)) = name.rsplit_once('_')
+        && let Ok(n) = tail.parse::<u32>()
+    {
+        return (head.to_string(), Some(n));
+    }
+    (name.to_string(), None)
+}
+
+fn kind_and_category(label: &str) -> (InstanceKind, String) {
+    let n = normalise(label).replace(' ', "_");
+    let kind = match n.as_str() {
+        "wall" => InstanceKind::Wall,
+        "floor" => InstanceKind::Floor,
+        "ceiling" => InstanceKind::Ceiling,
+        "door" => InstanceKind::Door,
+        "window" => InstanceKind::Window,
+        "stairs" | "staircase" | "stair" => InstanceKind::Stairs,
+        _ => InstanceKind::Object,
+    };
+    if kind != InstanceKind::Object {
+        return (kind, n);
+    }
+    let cat = objectnav_category(label)
+        .map(str::to_string)
+        .unwrap_or(if n.is_empty() { "object".into() } else { n });
+    (kind, cat)
+}
+
+/// Loads a `.gltf` or `.glb` file.
+///
+/// # Errors
+/// [`SceneError::Io`] when the file or a buffer cannot be read,
+/// [`SceneError::Gltf`] (naming the node where relevant) for malformed files,
+/// non-triangle-list indices or non-finite positions, [`SceneError::Empty`]
+/// when no triangles are found.
+///
+/// # Complexity
+/// O(V + T) in the vertices and triangles of all mesh instances.
+pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
+    let bytes = std::fs::read(path).map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    gltf_from_slice(&bytes, &name, Some(base))
+}
+
+/// Builds a scene from glTF JSON or GLB bytes; external buffers resolve
+/// against `base` (none when `None`).
+///
+/// # Errors
+/// As [`load_gltf`].
+pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<Scene, SceneError> {
+    let g = gltf::Gltf::from_slice(bytes).map_err(|e| err(None, e.to_string()))?;
+    let mut buffers: Vec<Vec<u8>> = Vec::new();
+    for b in g.buffers() {
+        let data = match b.source() {
+            gltf::buffer::Source::Bin => g
+                .blob
+                .clone()
+                .ok_or_else(|| err(None, "GLB without binary chunk"))?,
+            gltf::buffer::Source::Uri(uri) => {
+                if uri.starts_with("data:") {
+                    return Err(err(
+                        None,
+                        "data URIs are not supported; use a GLB or an external .bin",
+                    ));
+                }
+                let base = base.ok_or_else(|| {
+                    err(None, format!("external buffer `{uri}` without a base path"))
+                })?;
+                let p = base.join(uri);
+                std::fs::read(&p).map_err(|e| SceneError::Io {
+                    path: p.clone(),
+                    source: e,
+                })?
+            }
+        };
+        if data.len() < b.length() {
+            return Err(err(
+                None,
+                format!("buffer {} shorter than declared", b.index()),
+            ));
+        }
+        buffers.push(data);
+    }
+    let mut builder = MeshBuilder::new();
+    let mut instances: std::collections::HashMap<String, u32> = std::collections::HashMap::new();
+    let scene = g
+        .default_scene()
+        .or_else(|| g.scenes().next())
+        .ok_or_else(|| err(None, "no scene"))?;
+    let mut stack: Vec<(gltf::Node<'_>, Matrix4<f64>, Option<String>)> = scene
+        .nodes()
+        .map(|n| (n, Matrix4::identity(), None))
+        .collect();
+    // y-up to z-up
+    let to_z_up = Matrix4::new(
+        1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
+    );
+    let mut visited = 0usize;
+    while let Some((node, parent, inherited)) = stack.pop() {
+        visited += 1;
+        if visited > 1_000_000 {
+            return Err(err(None, "node hierarchy too deep or cyclic"));
+        }
+        let m = node.transform().matrix();
+        let local = Matrix4::from_fn(|r, c| f64::from(m[c][r]));
+        let world = parent * local;
+        let label = node
+            .name()
+            .filter(|n| !n.trim().is_empty())
+            .map(str::to_string)
+            .or(inherited);
+        if let Some(mesh) = node.mesh() {
+            let key = label.clone().unwrap_or_else(|| "object".into());
+            let inst = *instances.entry(key.clone()).or_insert_with(|| {
+                let (kind, cat) = kind_and_category(&parse_label(&key).0);
+                builder.add_instance(kind, &cat, &key, 0)
+            });
+            let node_name = label.as_deref();
+            let full = to_z_up * world;
+            let flip = full.fixed_view::<3, 3>(0, 0).determinant() < 0.0;
+            for prim in mesh.primitives() {
+                if prim.mode() != gltf::mesh::Mode::Triangles {
+                    continue;
+                }
+                let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
+                let pos: Vec<Point3<f64>> = reader
+                    .read_positions()
+                    .ok_or_else(|| err(node_name, "primitive without positions"))?
+                    .map(|p| {
+                        let v = full
+                            * nalgebra::Vector4::new(
+                                f64::from(p[0]),
+                                f64::from(p[1]),
+                                f64::from(p[2]),
+                                1.0,
+                            );
+                        Point3::new(v.x, v.y, v.z)
+                    })
+                    .collect();
+                if pos.iter().any(|p| !p.coords.iter().all(|c| c.is_finite())) {
+                    return Err(err(node_name, "non-finite vertex position"));
+                }
+                let idx: Vec<u32> = match reader.read_indices() {
+                    Some(i) => i.into_u32().collect(),
+                    None => (0..pos.len() as u32).collect(),
+                };
+                if !idx.len().is_multiple_of(3) {
+                    return Err(err(node_name, "index count is not a multiple of 3"));
+                }
+                for t in idx.chunks_exact(3) {
+                    let get = |i: u32| {
+                        pos.get(i as usize)
+                            .copied()
+                            .ok_or_else(|| err(node_name, format!("index {i} out of range")))
+                    };
+                    let (a, b, c) = (get(t[0])?, get(t[1])?, get(t[2])?);
+                    if flip {
+                        builder.triangle(a, c, b, inst);
+                    } else {
+                        builder.triangle(a, b, c, inst);
+                    }
+                }
+            }
+        }
+        for child in node.children() {
+            stack.push((child, world, label.clone()));
+        }
+    }
+    if builder.triangle_count() == 0 {
+        return Err(SceneError::Empty(format!("glTF `{name}` has no triangles")));
+    }
+    let zmin = builder
+        .instances()
+        .iter()
+        .filter(|i| i.kind == InstanceKind::Floor)
+        .map(|i| i.bounds.max.z)
+        .fold(f64::INFINITY, f64::min);
+    let all_min = builder
+        .instances()
+        .iter()
+        .map(|i| i.bounds.min.z)
+        .fold(f64::INFINITY, f64::min);
+    let elevation = if zmin.is_finite() { zmin } else { all_min };
+    let level = Level {
+        name: "Level 0".into(),
+        elevation,
+        height: 2.5,
+        floor_thickness: 0.0,
+    };
+    Scene::from_description(builder.finish(name, vec![level], Vec::new()))
+}
+
+impl Scene {
+    /// Loads a glTF/GLB scene with labelled nodes (see [`crate::gltf`]).
+    ///
+    /// # Errors
+    /// See [`load_gltf`].
+    pub fn from_gltf(path: &Path) -> Result<Scene, SceneError> {
+        load_gltf(path)
+    }
+}

@@ -1,0 +1,89 @@
+//! A CPU ObjectNav simulator: real and procedural houses as labelled
+//! triangle meshes, a walkable height field and geodesic distances, a
+//! ray-cast depth + semantic camera, Habitat's agent, episodes and metrics.
+//!
+//! # Should I use this crate?
+//!
+//! Use it to evaluate object-navigation methods without Habitat: it loads
+//! Sweet Home 3D homes ([`sh3d`]), glTF/GLB meshes with labelled nodes
+//! ([`gltf`]) or generates seeded procedural houses whose room and object
+//! statistics follow HM3D-Semantics ([`procedural`]); every triangle carries an
+//! object instance with an ObjectNav category ([`scene`], [`category`]). The
+//! Recast-style multi-layer height field ([`navmesh`]) answers "is navigable",
+//! snaps points to the floor, and gives geodesic distances and paths across
+//! floors ([`geodesic`]).
+//!
+//! # API themes
+//!
+//! * **Scenes**: [`Scene`] (mesh + BVH + labels), [`SceneDescription`] (its
+//!   serde form), [`ObjectInstance`], [`Level`], [`Room`].
+//! * **Sources**: [`Scene::procedural`], [`Scene::from_home_xml`],
+//!   [`Scene::from_sh3d`], [`Scene::from_gltf`].
+//! * **Navigability**: [`NavMesh::build`], [`NavMesh::is_navigable`],
+//!   [`NavMesh::snap`], [`NavMesh::geodesic_field`], [`NavMesh::distance`],
+//!   [`NavMesh::path`].
+//! * **Sensing and acting**: [`Camera`] over a packet-traced [`Bvh`] (depth,
+//!   semantic, optional RGB), optional sensor [`noise`], Habitat's [`Agent`]
+//!   and [`Action`]s.
+//! * **Protocol**: Habitat episode files and a generator ([`episodes`]),
+//!   [`Policy`], [`Simulator`], [`run_episode`], [`Summary`] of the
+//!   [`metrics`] (success, SPL, soft SPL, failure taxonomy).
+//!
+//! Coordinates are right-handed, z up, metres, everywhere.
+//!
+//! # Example
+//!
+//! ```
+//! use sornav_platform_sim::{NavMesh, NavMeshConfig, ProceduralConfig, Scene};
+//!
+//! let scene = Scene::procedural(42, &ProceduralConfig { floors: Some(1), ..Default::default() })?;
+//! let nav = NavMesh::build(&scene, &NavMeshConfig::default())?;
+//! // distance from somewhere walkable to the nearest bed
+//! let start = nav.span_center(nav.spans().len() as u32 / 2);
+//! let beds: Vec<_> = scene.objects_of("bed").map(|o| o.bounds.center()).collect();
+//! assert!(!beds.is_empty());
+//! let goals: Vec<_> = beds.iter().filter_map(|b| nav.snap(&nalgebra::Point3::new(b.x, b.y, 0.0), 1.5).ok()).collect();
+//! if let Ok(field) = nav.geodesic_field(&goals) {
+//!     let d = field.distance(&nav, &start)?;
+//!     assert!(d >= 0.0);
+//! }
+//! # Ok::<(), Box<dyn std::error::Error>>(())
+//! ```
+
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod category;
+pub mod error;
+pub mod geodesic;
+pub mod geometry;
+pub mod gltf;
+pub mod navmesh;
+pub mod obj;
+pub mod procedural;
+pub mod scene;
+pub mod sh3d;
+
+pub use error::{NavError, SceneError};
+pub use geodesic::GeodesicField;
+pub use navmesh::{NavMesh, NavMeshConfig, Span, SpanId};
+pub use procedural::ProceduralConfig;
+pub use scene::{
+    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, RayHit, Room, RoomType, Scene,
+    SceneDescription,
+};
+pub mod agent;
+pub mod episodes;
+pub mod metrics;
+pub mod noise;
+pub mod policy;
+pub mod render;
+pub mod run;
+
+pub use agent::{Action, Agent, AgentConfig, AgentError};
+pub use episodes::{Episode, EpisodeError, ObjectGoal, ViewPoint};
+pub use metrics::{EpisodeResult, Outcome, Summary};
+pub use noise::{NoiseConfig, NoiseModel};
+pub use policy::{Oracle, Policy, RandomWalk, StopAtOnce};
+pub use render::{Bvh, Camera, CameraConfig, CameraPose, Frame, RenderError};
+pub use run::{Observation, RunConfig, SimConfig, SimError, Simulator, run_episode};

@@ -1,0 +1,263 @@
+//! ObjectNav metrics (Habitat's definitions) and the failure taxonomy.
+//!
+//! * **Success**: the agent called STOP with geodesic distance to the nearest
+//!   goal view point at most 0.1 m (Habitat).
+//! * **Success within 1 m**: the agent called STOP within 1.0 m of a goal
+//!   object (the paper's boundary; distance from the agent's body, a vertical
+//!   segment from the feet to camera height, to the object's bounds).
+//! * **SPL** = S l / max(p, l) with l the start's geodesic distance to the
+//!   nearest view point and p the executed path length (Anderson et al. 2018).
+//! * **Soft SPL** = max(0, 1 - d_T / d_0) l / max(p, l) with d_T the final
+//!   and d_0 the initial geodesic distance to the nearest view point
+//!   (habitat-lab's `SoftSPL`).
+//! * **Failure taxonomy**, mutually exclusive and checked in this order:
+//!   cross-floor episode, step limit, wall-clock timeout, false stop (STOP away
+//!   from every goal object), other (STOP near an object but not at a view point).
+
+use serde::{Deserialize, Serialize};
+
+/// How an episode ended, for the failure taxonomy.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Outcome {
+    /// Habitat success.
+    Success,
+    /// Failed, and the closest goal is on another floor (> 0.5 m height difference).
+    CrossFloor,
+    /// Failed by running out of actions.
+    StepLimit,
+    /// Failed by running out of wall-clock time.
+    Timeout,
+    /// STOP called away from every goal object (beyond the 1 m boundary).
+    FalseStop,
+    /// Any other failure (STOP within 1 m of an object but not at a view point).
+    Other,
+}
+
+/// What happened, as the loop saw it (input of [`classify`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Termination {
+    /// The policy called STOP.
+    pub stopped: bool,
+    /// The action budget ran out.
+    pub step_limit: bool,
+    /// The wall-clock budget ran out.
+    pub timeout: bool,
+}
+
+/// SPL of one episode: `success * l / max(p, l)`; 0 when `l` is not positive
+/// or anything is non-finite.
+pub fn spl(success: bool, shortest: f64, path: f64) -> f64 {
+    if !success {
+        return 0.0;
+    }
+    path_efficiency(shortest, path)
+}
+
+/// `l / max(p, l)` in [0, 1] (0 for invalid input).
+fn path_efficiency(shortest: f64, path: f64) -> f64 {
+    if !(shortest.is_finite() && path.is_finite() && shortest > 0.0 && path >= 0.0) {
+        return 0.0;
+    }
+    (shortest / path.max(shortest)).clamp(0.0, 1.0)
+}
+
+/// Soft SPL of one episode (habitat-lab): `max(0, 1 - d_end / d_start) * l / max(p, l)`.
+pub fn soft_spl(dtg_end: f64, dtg_start: f64, shortest: f64, path: f64) -> f64 {
+    if !(dtg_start > 0.0 && dtg_start.is_finite()) {
+        return 0.0;
+    }
+    let soft = if dtg_end.is_finite() {
+        (1.0 - dtg_end / dtg_start).max(0.0)
+    } else {
+        0.0
+    };
+    soft * path_efficiency(shortest, path)
+}
+
+/// The outcome of an episode.
+///
+/// `success` and `near_object` (STOP within the object boundary) apply only
+/// when the agent stopped.
+pub fn classify(t: Termination, success: bool, near_object: bool, cross_floor: bool) -> Outcome {
+    if t.stopped && success {
+        Outcome::Success
+    } else if cross_floor {
+        Outcome::CrossFloor
+    } else if t.step_limit {
+        Outcome::StepLimit
+    } else if t.timeout {
+        Outcome::Timeout
+    } else if t.stopped && !near_object {
+        Outcome::FalseStop
+    } else {
+        Outcome::Other
+    }
+}
+
+/// Per-episode result of [`crate::run::run_episode`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeResult {
+    /// Episode id.
+    pub episode_id: String,
+    /// Scene id.
+    pub scene_id: String,
+    /// Target category.
+    pub object_category: String,
+    /// Habitat success (STOP within 0.1 m geodesic of a view point).
+    pub success: bool,
+    /// STOP within 1.0 m of a goal object.
+    pub success_1m: bool,
+    /// SPL.
+    pub spl: f64,
+    /// Soft SPL.
+    pub soft_spl: f64,
+    /// Geodesic distance to the nearest view point at the start (m).
+    pub start_geodesic_m: f64,
+    /// Geodesic distance to the nearest view point at the end (m);
+    /// `None` when the agent ended on a part of the surface with no route to a goal.
+    pub dtg_m: Option<f64>,
+    /// Executed path length (m).
+    pub path_length_m: f64,
+    /// Actions taken (STOP included).
+    pub actions: usize,
+    /// Blocked forward moves.
+    pub collisions: usize,
+    /// Whether the closest goal is on another floor.
+    pub cross_floor: bool,
+    /// How the episode ended.
+    pub outcome: Outcome,
+    /// Wall-clock time of the episode (s).
+    pub wall_s: f64,
+    /// Median time of one step (render + policy + bookkeeping), ms.
+    pub step_ms_p50: f64,
+}
+
+/// Aggregate of many episodes (means; rates are fractions in [0, 1]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Summary {
+    /// Number of episodes.
+    pub episodes: usize,
+    /// Habitat success rate.
+    pub success_rate: f64,
+    /// Success rate within 1 m of the object.
+    pub success_rate_1m: f64,
+    /// Mean SPL.
+    pub spl: f64,
+    /// Mean soft SPL.
+    pub soft_spl: f64,
+    /// Mean final distance to goal over episodes with a finite one (m).
+    pub dtg_m: f64,
+    /// Fraction ending in each failure class.
+    pub cross_floor_rate: f64,
+    /// Step-limit failures.
+    pub step_limit_rate: f64,
+    /// Timeouts.
+    pub timeout_rate: f64,
+    /// False stops.
+    pub false_stop_rate: f64,
+    /// Other failures.
+    pub other_rate: f64,
+    /// Mean actions per episode.
+    pub mean_actions: f64,
+    /// Mean collisions per episode.
+    pub mean_collisions: f64,
+}
+
+impl Summary {
+    /// Means over `results` (all zeros for none).
+    ///
+    /// # Complexity
+    /// O(n).
+    pub fn of(results: &[EpisodeResult]) -> Summary {
+        let n = results.len();
+        let mean = |f: &dyn Fn(&EpisodeResult) -> f64| {
+            if n == 0 {
+                0.0
+            } else {
+                results.iter().map(f).sum::<f64>() / n as f64
+            }
+        };
+        let rate = |o: Outcome| mean(&|r| f64::from(u8::from(r.outcome == o)));
+        let dtgs: Vec<f64> = results.iter().filter_map(|r| r.dtg_m).collect();
+        Summary {
+            episodes: n,
+            success_rate: mean(&|r| f64::from(u8::from(r.success))),
+            success_rate_1m: mean(&|r| f64::from(u8::from(r.success_1m))),
+            spl: mean(&|r| r.spl),
+            soft_spl: mean(&|r| r.soft_spl),
+            dtg_m: if dtgs.is_empty() {
+                0.0
+            } else {
+                dtgs.iter().sum::<f64>() / dtgs.len() as f64
+            },
+            cross_floor_rate: rate(Outcome::CrossFloor),
+            step_limit_rate: rate(Outcome::StepLimit),
+            timeout_rate: rate(Outcome::Timeout),
+            false_stop_rate: rate(Outcome::FalseStop),
+            other_rate: rate(Outcome::Other),
+            mean_actions: mean(&|r| r.actions as f64),
+            mean_collisions: mean(&|r| r.collisions as f64),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        /// SPL is in [0, 1], and equals 1 exactly for successes along a
+        /// shortest path (p <= l, up to rounding).
+        #[test]
+        fn spl_is_bounded_and_one_only_for_shortest_successes(success in any::<bool>(), l in 0.0f64..50.0, extra in 0.0f64..50.0) {
+            let p = l + extra;
+            let s = spl(success, l, p);
+            prop_assert!((0.0..=1.0).contains(&s));
+            if s == 1.0 {
+                prop_assert!(success && extra <= 1e-12 * l.max(1.0));
+            }
+            if success && extra == 0.0 && l > 0.0 {
+                prop_assert_eq!(s, 1.0);
+            }
+            let soft = soft_spl(extra, l + 1.0, l, p);
+            prop_assert!((0.0..=1.0).contains(&soft));
+        }
+    }
+
+    #[test]
+    fn taxonomy_order() {
+        let t = |stopped, step_limit, timeout| Termination {
+            stopped,
+            step_limit,
+            timeout,
+        };
+        assert_eq!(
+            classify(t(true, false, false), true, true, true),
+            Outcome::Success
+        );
+        assert_eq!(
+            classify(t(false, true, false), false, false, true),
+            Outcome::CrossFloor
+        );
+        assert_eq!(
+            classify(t(false, true, true), false, false, false),
+            Outcome::StepLimit
+        );
+        assert_eq!(
+            classify(t(false, false, true), false, false, false),
+            Outcome::Timeout
+        );
+        assert_eq!(
+            classify(t(true, false, false), false, false, false),
+            Outcome::FalseStop
+        );
+        assert_eq!(
+            classify(t(true, false, false), false, true, false),
+            Outcome::Other
+        );
+        assert_eq!(spl(true, f64::NAN, 1.0), 0.0);
+        assert_eq!(soft_spl(f64::INFINITY, 3.0, 3.0, 3.0), 0.0);
+    }
+}

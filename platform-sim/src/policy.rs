@@ -1,0 +1,252 @@
+//! The [`Policy`] trait (observation in, action out) and baseline policies
+//! for sanity checks and tests: [`RandomWalk`], [`StopAtOnce`] and the
+//! ground-truth [`Oracle`].
+
+use std::collections::{HashMap, VecDeque};
+
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::agent::{Action, Agent};
+use crate::episodes::Episode;
+use crate::geodesic::GeodesicField;
+use crate::run::{Observation, Simulator};
+
+/// An ObjectNav method: receives an observation per step and answers with
+/// an action.
+///
+/// `reset` receives the simulator so that ground-truth baselines (the oracle)
+/// can plan; a real method must use only the observations.
+pub trait Policy {
+    /// Called once before the first observation of an episode.
+    fn reset(&mut self, sim: &Simulator, episode: &Episode) {
+        let _ = (sim, episode);
+    }
+    /// Whether the policy reads camera frames (false skips rendering).
+    fn needs_frames(&self) -> bool {
+        true
+    }
+    /// The next action.
+    fn act(&mut self, obs: &Observation<'_>) -> Action;
+}
+
+/// Calls STOP at once (every episode must then fail: none starts at a view point).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StopAtOnce;
+
+impl Policy for StopAtOnce {
+    fn needs_frames(&self) -> bool {
+        false
+    }
+    fn act(&mut self, _obs: &Observation<'_>) -> Action {
+        Action::Stop
+    }
+}
+
+/// A seeded random walk: moves forward with probability `p_forward`, turns
+/// left or right otherwise (turning away after a collision), never stops.
+#[derive(Debug, Clone)]
+pub struct RandomWalk {
+    rng: ChaCha8Rng,
+    seed: u64,
+    /// Probability of MOVE_FORWARD at each step.
+    pub p_forward: f64,
+    last: Option<(nalgebra::Point3<f64>, Action)>,
+}
+
+impl RandomWalk {
+    /// A random walk with this seed (`p_forward` = 0.7).
+    pub fn new(seed: u64) -> RandomWalk {
+        RandomWalk {
+            rng: ChaCha8Rng::seed_from_u64(seed),
+            seed,
+            p_forward: 0.7,
+            last: None,
+        }
+    }
+}
+
+impl Policy for RandomWalk {
+    fn reset(&mut self, _sim: &Simulator, episode: &Episode) {
+        let h = episode
+            .episode_id
+            .bytes()
+            .fold(self.seed, |h, b| h.rotate_left(5) ^ u64::from(b));
+        self.rng = ChaCha8Rng::seed_from_u64(h);
+        self.last = None;
+    }
+    fn needs_frames(&self) -> bool {
+        false
+    }
+    fn act(&mut self, obs: &Observation<'_>) -> Action {
+        let blocked = self
+            .last
+            .is_some_and(|(p, a)| a == Action::MoveForward && p == obs.position);
+        let forward = !blocked && self.rng.random_bool(self.p_forward.clamp(0.0, 1.0));
+        let a = if forward {
+            Action::MoveForward
+        } else if self.rng.random_bool(0.5) {
+            Action::TurnLeft
+        } else {
+            Action::TurnRight
+        };
+        self.last = Some((obs.position, a));
+        a
+    }
+}
+
+/// Ground-truth oracle: follows the geodesic to the nearest goal view point
+/// and stops within the success radius.
+///
+/// # Algorithm
+/// Greedy descent of the geodesic field with one-step look-ahead over the 12
+/// headings reachable by turning: turn (the shorter way) towards the heading
+/// whose forward move lowers the distance most, move forward when it is the
+/// current one. When no forward move makes progress (a doorway or corner the
+/// 30 deg headings do not fit), a breadth-first search over the exact motion
+/// model (forward, left, right; up to `search_depth` actions) finds the
+/// shortest action sequence to a pose closer to the goal, and its first action
+/// is taken. STOP as soon as the geodesic distance is within `stop_distance`.
+///
+/// # Complexity
+/// O(12 step / cell) per greedy step; a search costs O(3^depth) in the worst case.
+#[derive(Debug, Clone)]
+pub struct Oracle {
+    /// Geodesic distance at which to STOP (0.1 m minus a margin: 0.09).
+    pub stop_distance: f64,
+    /// Depth of the fallback search (12 actions).
+    pub search_depth: usize,
+    field: Option<GeodesicField>,
+    nav: Option<std::sync::Arc<crate::NavMesh>>,
+    plan: VecDeque<Action>,
+}
+
+impl Default for Oracle {
+    fn default() -> Self {
+        Oracle {
+            stop_distance: 0.09,
+            search_depth: 12,
+            field: None,
+            nav: None,
+            plan: VecDeque::new(),
+        }
+    }
+}
+
+impl Oracle {
+    /// An oracle with the default settings.
+    pub fn new() -> Oracle {
+        Oracle::default()
+    }
+
+    fn dist(&self, agent: &Agent) -> f64 {
+        match (&self.field, &self.nav) {
+            (Some(f), Some(n)) => f.distance(n, &agent.position()).unwrap_or(f64::INFINITY),
+            _ => f64::INFINITY,
+        }
+    }
+
+    /// Shortest action sequence (BFS) to a pose strictly closer than `d0 - 0.05`
+    /// or within the stop distance.
+    fn search(&self, start: &Agent, d0: f64) -> Option<Vec<Action>> {
+        let nav = self.nav.as_ref()?;
+        let key = |a: &Agent| {
+            let p = a.position();
+            (
+                (p.x * 200.0).round() as i64,
+                (p.y * 200.0).round() as i64,
+                (p.z * 20.0).round() as i64,
+                (a.yaw() * 1000.0).round() as i64,
+            )
+        };
+        let mut seen: HashMap<_, ()> = HashMap::new();
+        let mut queue = VecDeque::new();
+        seen.insert(key(start), ());
+        queue.push_back((start.clone(), Vec::new()));
+        while let Some((agent, path)) = queue.pop_front() {
+            if path.len() >= self.search_depth {
+                continue;
+            }
+            for a in [Action::MoveForward, Action::TurnLeft, Action::TurnRight] {
+                let mut next = agent.clone();
+                if next.step(nav, a).collided {
+                    continue;
+                }
+                if seen.insert(key(&next), ()).is_some() {
+                    continue;
+                }
+                let mut p = path.clone();
+                p.push(a);
+                let d = self.dist(&next);
+                if d <= self.stop_distance || d < d0 - 0.05 {
+                    return Some(p);
+                }
+                queue.push_back((next, p));
+            }
+        }
+        None
+    }
+}
+
+impl Policy for Oracle {
+    fn reset(&mut self, sim: &Simulator, episode: &Episode) {
+        self.field = sim.goal_field(episode).ok();
+        self.nav = Some(sim.nav_shared());
+        self.plan.clear();
+    }
+
+    fn needs_frames(&self) -> bool {
+        false
+    }
+
+    fn act(&mut self, obs: &Observation<'_>) -> Action {
+        let agent = obs.agent;
+        let d0 = self.dist(agent);
+        if d0 <= self.stop_distance {
+            return Action::Stop;
+        }
+        if let Some(a) = self.plan.pop_front() {
+            return a;
+        }
+        let Some(nav) = self.nav.as_ref() else {
+            return Action::Stop;
+        };
+        // Greedy: best heading among the 12 reachable ones.
+        let turns = (std::f64::consts::TAU / agent.config().turn_deg.to_radians())
+            .round()
+            .max(1.0) as usize;
+        let mut best: Option<(f64, usize)> = None;
+        let mut probe = agent.clone();
+        for k in 0..turns {
+            if k > 0 {
+                probe.step(nav, Action::TurnLeft);
+            }
+            if let Some((p, _)) = probe.try_forward(nav) {
+                let d = self
+                    .field
+                    .as_ref()
+                    .and_then(|f| f.distance(nav, &p).ok())
+                    .unwrap_or(f64::INFINITY);
+                // Prefer fewer turns on ties.
+                let turns_needed = k.min(turns - k) as f64;
+                let score = d + 1e-3 * turns_needed;
+                if d < d0 - 1e-6 && best.is_none_or(|(s, _)| score < s) {
+                    best = Some((score, k));
+                }
+            }
+        }
+        match best {
+            Some((_, 0)) => Action::MoveForward,
+            Some((_, k)) if k <= turns / 2 => Action::TurnLeft,
+            Some(_) => Action::TurnRight,
+            None => match self.search(agent, d0) {
+                Some(p) => {
+                    self.plan = p.into();
+                    self.plan.pop_front().unwrap_or(Action::Stop)
+                }
+                // Nowhere closer is reachable: stopping is the best an oracle can do.
+                None => Action::Stop,
+            },
+        }
+    }
+}

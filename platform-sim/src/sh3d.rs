@@ -1,0 +1,903 @@
+//! Sweet Home 3D importer (`Home.xml` and `.sh3d` archives).
+//!
+//! Units and axes: `Home.xml` is in centimetres and radians with plan x right,
+//! plan y down and elevation up. The importer converts every coordinate to
+//! metres, right-handed, z up: `(x, y, z) = (x_plan, -y_plan, elevation) / 100`,
+//! so a top-down view with +y up looks like the plan.
+//!
+//! * **Walls** are extruded from their centre line with their `thickness`,
+//!   `height` and `heightAtEnd` (sloping tops); curved walls (`arcExtent`) are
+//!   split into straight pieces along the arc; joined ends are extended by half
+//!   the thickness to close corners.
+//! * **Doors and windows** (`doorOrWindow`) cut their opening (footprint x
+//!   elevation range) through the walls they overlap. Doors, i.e. openings
+//!   starting within 0.3 m of the floor and at least 1.8 m high, are left open
+//!   (no geometry, passable); windows keep their model.
+//! * **Rooms** become floor slabs (`floorVisible`) and ceilings
+//!   (`ceilingVisible`); staircases (`staircaseCutOutShape`) cut their footprint
+//!   out of the floors and ceilings they pass through, so levels connect.
+//! * **Furniture** is placed from its OBJ model by Sweet Home 3D's rule: apply
+//!   `modelRotation`, centre the model's bounds at the origin, scale to
+//!   width x height x depth, mirror (`modelMirrored`), rotate by `angle`,
+//!   translate to (x, y, level elevation + elevation). Groups are flattened
+//!   (their children keep absolute coordinates). Categories come from
+//!   [`crate::category::classify`] (name first, catalog id second).
+//! * **Levels** are sorted by elevation (then `elevationIndex`). Content of
+//!   hidden levels (`visible='false'`, e.g. roofs) is skipped unless
+//!   [`Sh3dOptions::include_hidden_levels`] is set; the levels themselves are
+//!   always listed.
+
+use std::collections::HashMap;
+use std::io::Read;
+use std::path::Path;
+use std::sync::Arc;
+
+use nalgebra::{Matrix3, Point2, Point3, Vector2, Vector3};
+use quick_xml::events::{BytesStart, Event};
+use serde::{Deserialize, Serialize};
+
+use crate::SceneError;
+use crate::category::{classify, room_type_from_name};
+use crate::geometry::{MeshBuilder, polygon_area, subtract_convex, triangulate};
+use crate::obj::{ObjMesh, parse_obj};
+use crate::scene::{InstanceKind, Level, Room, Scene};
+
+/// Path prefix of the models bundled with Sweet Home 3D.
+pub const RESOURCE_PREFIX: &str = "com/eteks/sweethome3d/io/resources/";
+
+/// Import options.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Sh3dOptions {
+    /// Also build the content of hidden levels (roofs, attics hidden in the design).
+    pub include_hidden_levels: bool,
+}
+
+#[derive(Debug, Clone)]
+struct XmlLevel {
+    id: String,
+    level: Level,
+    index: i64,
+    visible: bool,
+}
+
+#[derive(Debug, Clone)]
+struct XmlWall {
+    id: String,
+    level: Option<String>,
+    start: Point2<f64>,
+    end: Point2<f64>,
+    thickness: f64,
+    height: Option<f64>,
+    height_at_end: Option<f64>,
+    arc_extent: Option<f64>,
+    joined_start: bool,
+    joined_end: bool,
+}
+
+#[derive(Debug, Clone)]
+struct XmlRoom {
+    name: String,
+    level: Option<String>,
+    points: Vec<Point2<f64>>,
+    floor_visible: bool,
+    ceiling_visible: bool,
+}
+
+#[derive(Debug, Clone)]
+struct XmlPiece {
+    element: String,
+    level: Option<String>,
+    name: String,
+    catalog_id: Option<String>,
+    model: Option<String>,
+    x: f64,
+    y: f64,
+    elevation: f64,
+    angle: f64,
+    width: f64,
+    depth: f64,
+    height: f64,
+    mirrored: bool,
+    model_rotation: Option<Matrix3<f64>>,
+    door_or_window: bool,
+    staircase: bool,
+    visible: bool,
+}
+
+#[derive(Debug, Default)]
+struct XmlHome {
+    wall_height: f64,
+    levels: Vec<XmlLevel>,
+    walls: Vec<XmlWall>,
+    rooms: Vec<XmlRoom>,
+    pieces: Vec<XmlPiece>,
+}
+
+fn element_label(e: &BytesStart<'_>) -> String {
+    let name = String::from_utf8_lossy(e.name().as_ref()).to_string();
+    let mut id = None;
+    for a in e.attributes().flatten() {
+        if matches!(a.key.as_ref(), b"id" | b"name") {
+            id = Some(String::from_utf8_lossy(&a.value).to_string());
+            break;
+        }
+    }
+    match id {
+        Some(i) => format!("{name} '{i}'"),
+        None => name,
+    }
+}
+
+fn attrs(e: &BytesStart<'_>) -> Result<HashMap<String, String>, SceneError> {
+    let mut m = HashMap::new();
+    for a in e.attributes() {
+        let a = a.map_err(|err| SceneError::Xml {
+            element: Some(element_label(e)),
+            message: err.to_string(),
+        })?;
+        let v = a.unescape_value().map_err(|err| SceneError::Xml {
+            element: Some(element_label(e)),
+            message: err.to_string(),
+        })?;
+        m.insert(
+            String::from_utf8_lossy(a.key.as_ref()).to_string(),
+            v.to_string(),
+        );
+    }
+    Ok(m)
+}
+
+struct Attrs<'a> {
+    label: String,
+    m: &'a HashMap<String, String>,
+}
+
+impl Attrs<'_> {
+    fn opt_f(&self, k: &str) -> Result<Option<f64>, SceneError> {
+        match self.m.get(k) {
+            None => Ok(None),
+            Some(v) => {
+                let x: f64 = v.trim().parse().map_err(|_| SceneError::Attribute {
+                    element: self.label.clone(),
+                    attribute: k.to_string(),
+                    message: format!("`{v}` is not a number"),
+                })?;
+                if !x.is_finite() {
+                    return Err(SceneError::NonFinite {
+                        element: self.label.clone(),
+                        attribute: k.to_string(),
+                    });
+                }
+                Ok(Some(x))
+            }
+        }
+    }
+    fn f(&self, k: &str) -> Result<f64, SceneError> {
+        self.opt_f(k)?.ok_or_else(|| SceneError::Attribute {
+            element: self.label.clone(),
+            attribute: k.to_string(),
+            message: "missing".into(),
+        })
+    }
+    fn s(&self, k: &str) -> Option<String> {
+        self.m.get(k).cloned()
+    }
+    fn flag(&self, k: &str, default: bool) -> bool {
+        self.m.get(k).map_or(default, |v| v == "true")
+    }
+}
+
+fn parse_xml(xml: &str) -> Result<XmlHome, SceneError> {
+    let mut reader = quick_xml::Reader::from_str(xml);
+    let mut home = XmlHome {
+        wall_height: 250.0,
+        ..Default::default()
+    };
+    let mut stack: Vec<String> = Vec::new();
+    let mut group_levels: Vec<Option<String>> = Vec::new();
+    let mut saw_home = false;
+    let mut current_room: Option<XmlRoom> = None;
+    loop {
+        let ev = reader.read_event().map_err(|e| SceneError::Xml {
+            element: stack.last().cloned(),
+            message: e.to_string(),
+        })?;
+        let (e, empty) = match &ev {
+            Event::Start(e) => (e.clone(), false),
+            Event::Empty(e) => (e.clone(), true),
+            Event::End(end) => {
+                let name = String::from_utf8_lossy(end.name().as_ref()).to_string();
+                if name == "room"
+                    && let Some(r) = current_room.take()
+                {
+                    home.rooms.push(r);
+                }
+                if name == "furnitureGroup" {
+                    group_levels.pop();
+                }
+                stack.pop();
+                continue;
+            }
+            Event::Eof => break,
+            _ => continue,
+        };
+        let name = String::from_utf8_lossy(e.name().as_ref()).to_string();
+        let m = attrs(&e)?;
+        let a = Attrs {
+            label: element_label(&e),
+            m: &m,
+        };
+        match name.as_str() {
+            "home" => {
+                saw_home = true;
+                home.wall_height = a.opt_f("wallHeight")?.unwrap_or(250.0);
+            }
+            "level" => home.levels.push(XmlLevel {
+                id: a.s("id").unwrap_or_default(),
+                level: Level {
+                    name: a.s("name").unwrap_or_default(),
+                    elevation: a.f("elevation")? / 100.0,
+                    height: a.f("height")? / 100.0,
+                    floor_thickness: a.f("floorThickness")? / 100.0,
+                },
+                index: a.opt_f("elevationIndex")?.unwrap_or(0.0) as i64,
+                visible: a.flag("visible", true),
+            }),
+            "wall" => home.walls.push(XmlWall {
+                id: a.s("id").unwrap_or_default(),
+                level: a.s("level"),
+                start: Point2::new(a.f("xStart")?, a.f("yStart")?),
+                end: Point2::new(a.f("xEnd")?, a.f("yEnd")?),
+                thickness: a.f("thickness")?,
+                height: a.opt_f("height")?,
+                height_at_end: a.opt_f("heightAtEnd")?,
+                arc_extent: a.opt_f("arcExtent")?,
+                joined_start: m.contains_key("wallAtStart"),
+                joined_end: m.contains_key("wallAtEnd"),
+            }),
+            "room" => {
+                let r = XmlRoom {
+                    name: a.s("name").unwrap_or_default(),
+                    level: a.s("level"),
+                    points: Vec::new(),
+                    floor_visible: a.flag("floorVisible", true),
+                    ceiling_visible: a.flag("ceilingVisible", true),
+                };
+                if empty {
+                    home.rooms.push(r);
+                } else {
+                    current_room = Some(r);
+                }
+            }
+            "point" => {
+                if let Some(r) = current_room.as_mut() {
+                    r.points.push(Point2::new(a.f("x")?, a.f("y")?));
+                }
+            }
+            "furnitureGroup" => {
+                let lvl = a
+                    .s("level")
+                    .or_else(|| group_levels.last().cloned().flatten());
+                if !empty {
+                    group_levels.push(lvl);
+                }
+            }
+            "pieceOfFurniture" | "doorOrWindow" | "light" => {
+                let rot = match a.s("modelRotation") {
+                    None => None,
+                    Some(v) => {
+                        let vals: Vec<f64> = v
+                            .split_whitespace()
+                            .filter_map(|t| t.parse().ok())
+                            .collect();
+                        if vals.len() != 9 || vals.iter().any(|x| !x.is_finite()) {
+                            return Err(SceneError::Attribute {
+                                element: a.label.clone(),
+                                attribute: "modelRotation".into(),
+                                message: format!("expected 9 numbers, got `{v}`"),
+                            });
+                        }
+                        Some(Matrix3::from_row_slice(&vals))
+                    }
+                };
+                home.pieces.push(XmlPiece {
+                    element: a.label.clone(),
+                    level: a
+                        .s("level")
+                        .or_else(|| group_levels.last().cloned().flatten()),
+                    name: a.s("name").unwrap_or_default(),
+                    catalog_id: a.s("catalogId"),
+                    model: a.s("model"),
+                    x: a.f("x")?,
+                    y: a.f("y")?,
+                    elevation: a.opt_f("elevation")?.unwrap_or(0.0),
+                    angle: a.opt_f("angle")?.unwrap_or(0.0),
+                    width: a.f("width")?,
+                    depth: a.f("depth")?,
+                    height: a.f("height")?,
+                    mirrored: a.flag("modelMirrored", false),
+                    model_rotation: rot,
+                    door_or_window: name == "doorOrWindow",
+                    staircase: m.contains_key("staircaseCutOutShape"),
+                    visible: a.flag("visible", true),
+                });
+            }
+            _ => {}
+        }
+        if !empty {
+            stack.push(name);
+        }
+    }
+    if !stack.is_empty() {
+        return Err(SceneError::Xml {
+            element: stack.last().cloned(),
+            message: format!("document truncated: {} element(s) not closed", stack.len()),
+        });
+    }
+    if !saw_home {
+        return Err(SceneError::Xml {
+            element: None,
+            message: "no <home> element".into(),
+        });
+    }
+    Ok(home)
+}
+
+/// Plan (cm, y down) to scene (m, y up).
+fn to_scene(p: Point2<f64>) -> Point2<f64> {
+    Point2::new(p.x / 100.0, -p.y / 100.0)
+}
+
+/// Footprint of a piece in scene coordinates (counter-clockwise quad).
+fn footprint(p: &XmlPiece) -> Vec<Point2<f64>> {
+    let (c, s) = (p.angle.cos(), p.angle.sin());
+    let mut out: Vec<Point2<f64>> = [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)]
+        .iter()
+        .map(|&(sx, sy)| {
+            let (lx, ly) = (sx * p.width * 0.5, sy * p.depth * 0.5);
+            to_scene(Point2::new(p.x + lx * c - ly * s, p.y + lx * s + ly * c))
+        })
+        .collect();
+    if polygon_area(&out) < 0.0 {
+        out.reverse();
+    }
+    out
+}
+
+/// A wall opening: along-wall interval and vertical range (absolute z).
+struct Cut {
+    lo: f64,
+    hi: f64,
+    z0: f64,
+    z1: f64,
+}
+
+/// Model source: resolves a model path to OBJ text.
+type Resolver<'a> = dyn FnMut(&str) -> Option<Result<String, SceneError>> + 'a;
+
+/// Loads a `Home.xml` file; models resolve against `models_dir`
+/// (paths relative to [`RESOURCE_PREFIX`]).
+///
+/// # Errors
+/// [`SceneError`] naming the offending element for malformed XML, missing
+/// attributes, non-finite numbers or missing models.
+pub fn load_home_xml(
+    path: &Path,
+    models_dir: &Path,
+    options: &Sh3dOptions,
+) -> Result<Scene, SceneError> {
+    let xml = std::fs::read_to_string(path).map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    home_from_xml_str(&xml, &name, models_dir, options)
+}
+
+/// Builds a scene from `Home.xml` text; models resolve against `models_dir`.
+///
+/// # Errors
+/// As [`load_home_xml`].
+pub fn home_from_xml_str(
+    xml: &str,
+    name: &str,
+    models_dir: &Path,
+    options: &Sh3dOptions,
+) -> Result<Scene, SceneError> {
+    let mut resolve = |model: &str| -> Option<Result<String, SceneError>> {
+        let rel = model.strip_prefix(RESOURCE_PREFIX).unwrap_or(model);
+        let p = models_dir.join(rel);
+        p.is_file().then(|| {
+            std::fs::read_to_string(&p).map_err(|e| SceneError::Io {
+                path: p.clone(),
+                source: e,
+            })
+        })
+    };
+    build_home(xml, name, &mut resolve, options)
+}
+
+/// Loads a `.sh3d` archive (its `Home.xml` entry and embedded models).
+///
+/// # Errors
+/// [`SceneError::Zip`] for an unreadable archive or one without `Home.xml`,
+/// then as [`load_home_xml`].
+pub fn load_sh3d(path: &Path, options: &Sh3dOptions) -> Result<Scene, SceneError> {
+    let file = std::fs::File::open(path).map_err(|e| SceneError::Io {
+        path: path.to_path_buf(),
+        source: e,
+    })?;
+    let mut zip = zip::ZipArchive::new(file).map_err(|e| SceneError::Zip(e.to_string()))?;
+    let read = |zip: &mut zip::ZipArchive<std::fs::File>, n: &str| -> Result<String, SceneError> {
+        let mut f = zip
+            .by_name(n)
+            .map_err(|e| SceneError::Zip(format!("{n}: {e}")))?;
+        let mut buf = Vec::new();
+        f.read_to_end(&mut buf)
+            .map_err(|e| SceneError::Zip(format!("{n}: {e}")))?;
+        Ok(String::from_utf8_lossy(&buf).to_string())
+    };
+    let xml = read(&mut zip, "Home.xml")?;
+    let names: Vec<String> = zip.file_names().map(str::to_string).collect();
+    let name = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    let mut resolve = |model: &str| -> Option<Result<String, SceneError>> {
+        let entry = if names.iter().any(|n| n == model) {
+            model.to_string()
+        } else {
+            names
+                .iter()
+                .find(|n| n.starts_with(&format!("{model}/")) && n.ends_with(".obj"))?
+                .clone()
+        };
+        Some(read(&mut zip, &entry))
+    };
+    build_home(&xml, &name, &mut resolve, options)
+}
+
+impl Scene {
+    /// Loads a Sweet Home 3D `Home.xml` (see [`crate::sh3d`]).
+    ///
+    /// # Errors
+    /// See [`load_home_xml`].
+    pub fn from_home_xml(path: &Path, models_dir: &Path) -> Result<Scene, SceneError> {
+        load_home_xml(path, models_dir, &Sh3dOptions::default())
+    }
+    /// Loads a Sweet Home 3D `.sh3d` archive (see [`crate::sh3d`]).
+    ///
+    /// # Errors
+    /// See [`load_sh3d`].
+    pub fn from_sh3d(path: &Path) -> Result<Scene, SceneError> {
+        load_sh3d(path, &Sh3dOptions::default())
+    }
+}
+
+/// Builds a scene from `Home.xml` text with a model resolver.
+fn build_home(
+    xml: &str,
+    name: &str,
+    resolve: &mut Resolver<'_>,
+    options: &Sh3dOptions,
+) -> Result<Scene, SceneError> {
+    let home = parse_xml(xml)?;
+    let mut levels = home.levels.clone();
+    levels.sort_by(|a, b| {
+        a.level
+            .elevation
+            .total_cmp(&b.level.elevation)
+            .then(a.index.cmp(&b.index))
+    });
+    if levels.is_empty() {
+        levels.push(XmlLevel {
+            id: String::new(),
+            level: Level {
+                name: "Level 0".into(),
+                elevation: 0.0,
+                height: home.wall_height / 100.0,
+                floor_thickness: 0.12,
+            },
+            index: 0,
+            visible: true,
+        });
+    }
+    let level_of = |id: &Option<String>| -> Result<usize, SceneError> {
+        match id {
+            None => Ok(0),
+            Some(i) => levels
+                .iter()
+                .position(|l| &l.id == i)
+                .ok_or_else(|| SceneError::Invalid(format!("unknown level `{i}`"))),
+        }
+    };
+    let built = |l: usize| options.include_hidden_levels || levels[l].visible;
+    if home.walls.is_empty() && home.rooms.is_empty() && home.pieces.is_empty() {
+        return Err(SceneError::Empty(format!(
+            "home `{name}` has no walls, rooms or furniture"
+        )));
+    }
+
+    let mut b = MeshBuilder::new();
+    // staircase footprints with their vertical range
+    let mut stairs: Vec<(Vec<Point2<f64>>, f64, f64)> = Vec::new();
+    for p in &home.pieces {
+        let l = level_of(&p.level)?;
+        if p.staircase && p.visible && built(l) {
+            let z0 = levels[l].level.elevation + p.elevation / 100.0;
+            stairs.push((footprint(p), z0, z0 + p.height / 100.0));
+        }
+    }
+
+    // rooms: floors and ceilings
+    let mut rooms = Vec::new();
+    for r in &home.rooms {
+        let l = level_of(&r.level)?;
+        let lv = &levels[l].level;
+        let poly: Vec<Point2<f64>> = r.points.iter().map(|p| to_scene(*p)).collect();
+        if poly.len() < 3 {
+            continue;
+        }
+        rooms.push(Room {
+            name: r.name.clone(),
+            room_type: room_type_from_name(&r.name),
+            level: l,
+            polygon: if polygon_area(&poly) < 0.0 {
+                poly.iter().rev().copied().collect()
+            } else {
+                poly.clone()
+            },
+            floor_z: lv.elevation,
+        });
+        if !built(l) {
+            continue;
+        }
+        let label = if r.name.is_empty() {
+            "room".to_string()
+        } else {
+            r.name.clone()
+        };
+        let holes_at = |z: f64| -> Vec<&Vec<Point2<f64>>> {
+            stairs
+                .iter()
+                .filter(|(_, z0, z1)| z > z0 + 0.01 && z <= z1 + 0.01)
+                .map(|(f, _, _)| f)
+                .collect()
+        };
+        let pieces = |z: f64| -> Vec<Vec<Point2<f64>>> {
+            let mut out: Vec<Vec<Point2<f64>>> = triangulate(&poly)
+                .into_iter()
+                .map(|t| t.iter().map(|&i| poly[i]).collect())
+                .collect();
+            for h in holes_at(z) {
+                out = out
+                    .into_iter()
+                    .flat_map(|p| subtract_convex(&p, h))
+                    .collect();
+            }
+            out
+        };
+        if r.floor_visible {
+            let inst = b.add_instance(InstanceKind::Floor, "floor", &label, l);
+            for p in pieces(lv.elevation) {
+                b.horizontal_polygon(&p, lv.elevation, true, inst);
+                b.horizontal_polygon(&p, lv.elevation - lv.floor_thickness, false, inst);
+            }
+        }
+        if r.ceiling_visible {
+            let zc = lv.elevation + lv.height;
+            let inst = b.add_instance(InstanceKind::Ceiling, "ceiling", &label, l);
+            for p in pieces(zc) {
+                b.horizontal_polygon(&p, zc, false, inst);
+            }
+        }
+    }
+
+    // walls with openings
+    let openings: Vec<(usize, &XmlPiece)> = home
+        .pieces
+        .iter()
+        .filter(|p| p.door_or_window && p.visible)
+        .map(|p| Ok((level_of(&p.level)?, p)))
+        .collect::<Result<_, SceneError>>()?;
+    for w in &home.walls {
+        let l = level_of(&w.level)?;
+        if !built(l) {
+            continue;
+        }
+        let lv = &levels[l].level;
+        let h0 = w.height.unwrap_or(home.wall_height) / 100.0;
+        let h1 = w.height_at_end.map_or(h0, |h| h / 100.0);
+        let t = w.thickness / 100.0;
+        if t <= 0.0 {
+            return Err(SceneError::Attribute {
+                element: format!("wall '{}'", w.id),
+                attribute: "thickness".into(),
+                message: "must be > 0".into(),
+            });
+        }
+        let (s, e) = (to_scene(w.start), to_scene(w.end));
+        // pieces along the wall (arc split into straight segments)
+        let pts: Vec<Point2<f64>> = match w.arc_extent {
+            Some(a) if a.abs() > 1e-3 && (e - s).norm() > 1e-6 => arc_points(s, e, -a),
+            _ => vec![s, e],
+        };
+        let total: f64 = pts.windows(2).map(|p| (p[1] - p[0]).norm()).sum();
+        if total < 1e-6 {
+            continue;
+        }
+        let inst = b.add_instance(InstanceKind::Wall, "wall", &format!("wall {}", w.id), l);
+        let mut acc = 0.0;
+        let n_seg = pts.len() - 1;
+        for k in 0..n_seg {
+            let (a, c) = (pts[k], pts[k + 1]);
+            let len = (c - a).norm();
+            if len < 1e-9 {
+                continue;
+            }
+            let u = (c - a) / len;
+            let ext_s = if k == 0 && w.joined_start {
+                t * 0.5
+            } else {
+                0.0
+            };
+            let ext_e = if k + 1 == n_seg && w.joined_end {
+                t * 0.5
+            } else {
+                0.0
+            };
+            let height_at = |d: f64| h0 + (h1 - h0) * ((acc + d) / total).clamp(0.0, 1.0);
+            let mut cuts = Vec::new();
+            for (ol, p) in &openings {
+                if *ol != l {
+                    continue;
+                }
+                let fp = footprint(p);
+                let nrm = Vector2::new(-u.y, u.x);
+                let (mut lo, mut hi, mut nlo, mut nhi) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+                for q in &fp {
+                    let v = q - a;
+                    lo = lo.min(v.dot(&u));
+                    hi = hi.max(v.dot(&u));
+                    nlo = nlo.min(v.dot(&nrm));
+                    nhi = nhi.max(v.dot(&nrm));
+                }
+                if nhi < -t * 0.5 || nlo > t * 0.5 || hi <= 0.0 || lo >= len {
+                    continue;
+                }
+                let z0 = lv.elevation + p.elevation / 100.0;
+                cuts.push(Cut {
+                    lo: lo.max(-ext_s),
+                    hi: hi.min(len + ext_e),
+                    z0,
+                    z1: z0 + p.height / 100.0,
+                });
+            }
+            wall_with_cuts(
+                &mut b,
+                inst,
+                a,
+                u,
+                len,
+                ext_s,
+                ext_e,
+                t,
+                lv.elevation,
+                &height_at,
+                &cuts,
+            );
+            acc += len;
+        }
+    }
+
+    // furniture, doors, windows
+    let mut cache: HashMap<String, Arc<ObjMesh>> = HashMap::new();
+    for p in &home.pieces {
+        let l = level_of(&p.level)?;
+        if !p.visible || !built(l) {
+            continue;
+        }
+        let lv = &levels[l].level;
+        let is_door = p.door_or_window && p.elevation < 30.0 && p.height >= 180.0;
+        let (kind, category) = if p.staircase {
+            (InstanceKind::Stairs, "stairs".to_string())
+        } else if p.door_or_window {
+            if is_door {
+                (InstanceKind::Door, "door".to_string())
+            } else {
+                (InstanceKind::Window, "window".to_string())
+            }
+        } else {
+            (
+                InstanceKind::Object,
+                classify(&p.name, p.catalog_id.as_deref()),
+            )
+        };
+        let inst = b.add_instance(kind, &category, &p.name, l);
+        let z0 = lv.elevation + p.elevation / 100.0;
+        if is_door {
+            for q in footprint(p) {
+                b.include_in_bounds(inst, Point3::new(q.x, q.y, z0));
+                b.include_in_bounds(inst, Point3::new(q.x, q.y, z0 + p.height / 100.0));
+            }
+            continue;
+        }
+        let Some(model) = p.model.as_deref() else {
+            return Err(SceneError::Attribute {
+                element: p.element.clone(),
+                attribute: "model".into(),
+                message: "missing".into(),
+            });
+        };
+        let mesh = match cache.get(model) {
+            Some(m) => m.clone(),
+            None => {
+                let text = resolve(model).ok_or_else(|| SceneError::MissingModel {
+                    element: p.element.clone(),
+                    model: model.to_string(),
+                })??;
+                let m = Arc::new(parse_obj(&text, model)?);
+                cache.insert(model.to_string(), m.clone());
+                m
+            }
+        };
+        place_model(&mut b, inst, &mesh, p, z0);
+    }
+    let desc = b.finish(name, levels.into_iter().map(|l| l.level).collect(), rooms);
+    if desc.triangles.is_empty() {
+        return Err(SceneError::Empty(format!(
+            "home `{name}` produced no geometry"
+        )));
+    }
+    Scene::from_description(desc)
+}
+
+/// Points along a circular arc from `s` to `e` sweeping `extent` radians
+/// (counter-clockwise when positive), one point per 10 degrees at least.
+fn arc_points(s: Point2<f64>, e: Point2<f64>, extent: f64) -> Vec<Point2<f64>> {
+    let chord = e - s;
+    let l = chord.norm();
+    let m = s + chord * 0.5;
+    let perp = Vector2::new(-chord.y, chord.x) / l;
+    let dist = (l * 0.5) / (extent * 0.5).tan();
+    let c = m + perp * dist;
+    let n = ((extent.abs() / (std::f64::consts::PI / 18.0)).ceil() as usize).max(2);
+    let r0 = s - c;
+    (0..=n)
+        .map(|k| {
+            let a = extent * k as f64 / n as f64;
+            let (sn, cs) = a.sin_cos();
+            if k == n {
+                e
+            } else {
+                c + Vector2::new(r0.x * cs - r0.y * sn, r0.x * sn + r0.y * cs)
+            }
+        })
+        .collect()
+}
+
+/// Extrudes one straight wall piece with rectangular openings cut out.
+#[allow(clippy::too_many_arguments)]
+fn wall_with_cuts(
+    b: &mut MeshBuilder,
+    inst: u32,
+    a: Point2<f64>,
+    u: Vector2<f64>,
+    len: f64,
+    ext_s: f64,
+    ext_e: f64,
+    t: f64,
+    floor: f64,
+    height_at: &dyn Fn(f64) -> f64,
+    cuts: &[Cut],
+) {
+    let mut xs = vec![-ext_s, len + ext_e];
+    for c in cuts {
+        xs.push(c.lo);
+        xs.push(c.hi);
+    }
+    xs.sort_by(f64::total_cmp);
+    xs.dedup_by(|p, q| (*p - *q).abs() < 1e-6);
+    let nrm = Vector2::new(-u.y, u.x);
+    for win in xs.windows(2) {
+        let (x0, x1) = (win[0], win[1]);
+        let mid = 0.5 * (x0 + x1);
+        let (top0, top1) = (
+            floor + height_at(x0.max(0.0)),
+            floor + height_at(x1.min(len)),
+        );
+        // vertical solid ranges: [floor, top] minus openings covering this interval
+        let mut open: Vec<(f64, f64)> = cuts
+            .iter()
+            .filter(|c| c.lo <= mid && c.hi >= mid)
+            .map(|c| (c.z0, c.z1))
+            .collect();
+        open.sort_by(|p, q| p.0.total_cmp(&q.0));
+        let mut z = floor;
+        let mut solids = Vec::new();
+        for (o0, o1) in open {
+            if o0 > z + 1e-6 {
+                solids.push((z, o0, false));
+            }
+            z = z.max(o1);
+        }
+        solids.push((z, f64::INFINITY, true));
+        for (za, zb, to_top) in solids {
+            let (zb0, zb1) = if to_top {
+                (top0, top1)
+            } else {
+                (zb.min(top0), zb.min(top1))
+            };
+            if zb0 <= za + 1e-6 && zb1 <= za + 1e-6 {
+                continue;
+            }
+            let p = |x: f64, side: f64, zz: f64| {
+                let q = a + u * x + nrm * side * t * 0.5;
+                Point3::new(q.x, q.y, zz)
+            };
+            let c = [
+                p(x0, -1.0, za),
+                p(x1, -1.0, za),
+                p(x1, 1.0, za),
+                p(x0, 1.0, za),
+                p(x0, -1.0, zb0.max(za)),
+                p(x1, -1.0, zb1.max(za)),
+                p(x1, 1.0, zb1.max(za)),
+                p(x0, 1.0, zb0.max(za)),
+            ];
+            b.hexahedron(&c, inst);
+        }
+    }
+}
+
+/// Places an OBJ model by Sweet Home 3D's rule (see the module docs).
+fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0: f64) {
+    let rot = p.model_rotation.unwrap_or_else(Matrix3::identity);
+    let verts: Vec<Vector3<f64>> = mesh.vertices.iter().map(|v| rot * v.coords).collect();
+    let mut lo = Vector3::repeat(f64::MAX);
+    let mut hi = Vector3::repeat(f64::MIN);
+    for t in &mesh.triangles {
+        for &i in t {
+            lo = lo.inf(&verts[i as usize]);
+            hi = hi.sup(&verts[i as usize]);
+        }
+    }
+    if lo.x > hi.x {
+        return;
+    }
+    let centre = (lo + hi) * 0.5;
+    let ext = hi - lo;
+    let scale = |target: f64, e: f64| if e > 1e-9 { target / e } else { 1.0 };
+    let s = Vector3::new(
+        scale(p.width, ext.x),
+        scale(p.height, ext.y),
+        scale(p.depth, ext.z),
+    );
+    let (sn, cs) = p.angle.sin_cos();
+    let flip = p.mirrored != (rot.determinant() < 0.0);
+    let tr = |v: &Vector3<f64>| -> Point3<f64> {
+        let mut q = (v - centre).component_mul(&s);
+        if p.mirrored {
+            q.x = -q.x;
+        }
+        // SH3D 3-D space: x = plan x, y = up, z = plan y; rotate by `angle` in plan
+        let px = p.x + q.x * cs - q.z * sn;
+        let py = p.y + q.x * sn + q.z * cs;
+        Point3::new(px / 100.0, -py / 100.0, z0 + (q.y + p.height * 0.5) / 100.0)
+    };
+    for t in &mesh.triangles {
+        let (v0, v1, v2) = (
+            tr(&verts[t[0] as usize]),
+            tr(&verts[t[1] as usize]),
+            tr(&verts[t[2] as usize]),
+        );
+        if flip {
+            b.triangle(v0, v2, v1, inst);
+        } else {
+            b.triangle(v0, v1, v2, inst);
+        }
+    }
+}

@@ -1,0 +1,288 @@
+//! Generated episodes satisfy their constraints; the oracle scores SR = 1 and
+//! SPL >= 0.95, stopping at once scores SR = 0 (validates the metric chain).
+
+use nalgebra::Point3;
+use sornav_platform_sim::episodes::generator::body_distance;
+use sornav_platform_sim::episodes::{GeneratorConfig, HabitatDataset, generate_episodes};
+use sornav_platform_sim::metrics::{Outcome, Summary};
+use sornav_platform_sim::procedural::ProceduralConfig;
+use sornav_platform_sim::{
+    CameraConfig, Episode, Oracle, Policy, RandomWalk, RunConfig, Scene, SimConfig, Simulator,
+    StopAtOnce, run_episode,
+};
+
+fn simulator(scene: Scene) -> Simulator {
+    let config = SimConfig {
+        camera: CameraConfig {
+            width: 160,
+            height: 120,
+            ..CameraConfig::default()
+        },
+        ..SimConfig::default()
+    };
+    Simulator::new(scene, config).unwrap()
+}
+
+/// Every episode satisfies the generator's own constraints, checked with
+/// independent tools (parry's ray cast for visibility, a fresh geodesic field).
+fn check_constraints(sim: &Simulator, episodes: &[Episode], config: &GeneratorConfig) {
+    let nav = sim.nav();
+    let scene = sim.scene();
+    let cam_h = sim.camera().config().mount_height;
+    for e in episodes {
+        assert!(
+            nav.is_navigable(&e.start_position),
+            "episode {}: start not navigable",
+            e.episode_id
+        );
+        let field = nav.geodesic_field(&e.view_point_positions()).unwrap();
+        let d = field.distance(nav, &e.start_position).unwrap();
+        assert!(
+            (config.min_geodesic..=config.max_geodesic).contains(&d),
+            "episode {}: geodesic {d}",
+            e.episode_id
+        );
+        assert!((d - e.geodesic_distance.unwrap()).abs() < 1e-6);
+        // The closest goal's centre is at most the view point reach plus half
+        // the object's diagonal away from its nearest view point.
+        let closest = scene
+            .instance(e.closest_goal_object_id.unwrap() as u32)
+            .unwrap();
+        let reach = config.view_point_radius + cam_h + closest.bounds.extents().norm() / 2.0;
+        assert!(
+            d + reach >= e.euclidean_distance.unwrap(),
+            "episode {}: geodesic {d} vs euclidean {:?}",
+            e.episode_id,
+            e.euclidean_distance
+        );
+        let goals_of_category = scene.objects_of(&e.object_category).count();
+        assert!(!e.goals.is_empty() && e.goals.len() <= goals_of_category);
+        for g in &e.goals {
+            let obj = scene.instance(g.object_id as u32).unwrap();
+            assert_eq!(obj.category, e.object_category);
+            for v in &g.view_points {
+                assert!(nav.is_navigable(&v.position));
+                assert!(body_distance(obj, &v.position, cam_h) <= config.view_point_radius + 1e-9);
+                // Some ray from the eye to the object's box first hits the object.
+                let eye = v.position + nalgebra::Vector3::new(0.0, 0.0, cam_h);
+                let b = obj.bounds;
+                // The generator's 27 sample points, re-cast with parry's ray caster.
+                const F: [f64; 3] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
+                let f = &F;
+                let samples: Vec<(f64, f64, f64)> = f
+                    .iter()
+                    .flat_map(|&i| {
+                        f.iter()
+                            .flat_map(move |&j| f.iter().map(move |&k| (i, j, k)))
+                    })
+                    .collect();
+                let seen = samples.into_iter().any(|(i, j, k)| {
+                    let t = Point3::new(
+                        b.min.x + (b.max.x - b.min.x) * i,
+                        b.min.y + (b.max.y - b.min.y) * j,
+                        b.min.z + (b.max.z - b.min.z) * k,
+                    );
+                    let d = t - eye;
+                    scene
+                        .cast_ray(&eye, &d, d.norm() + 1e-3)
+                        .is_some_and(|h| h.instance == obj.id)
+                });
+                assert!(
+                    seen,
+                    "view point {:?} does not see object {}",
+                    v.position, obj.id
+                );
+            }
+        }
+        // No episode starts at a view point.
+        assert!(
+            e.view_point_positions()
+                .iter()
+                .all(|v| (v - e.start_position).norm() > 0.1)
+        );
+    }
+}
+
+fn run_all(
+    sim: &Simulator,
+    episodes: &[Episode],
+    policy: &mut dyn Policy,
+    config: &RunConfig,
+) -> Summary {
+    let results: Vec<_> = episodes
+        .iter()
+        .map(|e| run_episode(sim, e, policy, config).unwrap())
+        .collect();
+    for r in &results {
+        assert!((0.0..=1.0).contains(&r.spl) && (0.0..=1.0).contains(&r.soft_spl));
+        assert!(r.actions <= config.max_actions);
+        if r.spl == 1.0 {
+            assert!(r.success && r.path_length_m <= r.start_geodesic_m + 1e-9);
+        }
+    }
+    Summary::of(&results)
+}
+
+fn oracle_and_stop(sim: &Simulator, episodes: &[Episode]) {
+    let config = RunConfig::default();
+    let oracle = run_all(sim, episodes, &mut Oracle::new(), &config);
+    assert_eq!(oracle.success_rate, 1.0, "oracle: {oracle:?}");
+    // Habitat success (0.1 m of a view point) does not imply 1 m of the
+    // object: the oracle stops on entering the view point band, up to 0.1 m
+    // outside its 1 m edge.
+    assert!(oracle.success_rate_1m > 0.0);
+    assert!(oracle.spl >= 0.95, "oracle SPL {}", oracle.spl);
+    let cross = episodes
+        .iter()
+        .filter(|e| e.cross_floor == Some(true))
+        .count();
+    eprintln!(
+        "{}: {} episodes ({cross} cross-floor), oracle SR {} SPL {:.4} SR@1m {:.2} actions {:.1}",
+        sim.scene().name(),
+        episodes.len(),
+        oracle.success_rate,
+        oracle.spl,
+        oracle.success_rate_1m,
+        oracle.mean_actions
+    );
+    let stop = run_all(sim, episodes, &mut StopAtOnce, &config);
+    assert_eq!(stop.success_rate, 0.0);
+    assert_eq!(stop.mean_actions, 1.0);
+    assert_eq!(stop.spl, 0.0);
+}
+
+#[test]
+fn procedural_houses_oracle_and_stop() {
+    let config = GeneratorConfig {
+        episodes_per_category: 2,
+        seed: 3,
+        ..GeneratorConfig::default()
+    };
+    let mut total = 0;
+    for (seed, floors) in [(1u64, 1u32), (2, 2)] {
+        let scene = Scene::procedural(
+            seed,
+            &ProceduralConfig {
+                floors: Some(floors),
+                ..ProceduralConfig::default()
+            },
+        )
+        .unwrap();
+        let sim = simulator(scene);
+        let episodes = generate_episodes(&sim, &config).unwrap();
+        assert!(
+            episodes.len() >= 4,
+            "house {seed}: only {} episodes",
+            episodes.len()
+        );
+        // Deterministic per seed.
+        assert_eq!(episodes, generate_episodes(&sim, &config).unwrap());
+        check_constraints(&sim, &episodes, &config);
+        oracle_and_stop(&sim, &episodes);
+        // Episodes survive Habitat's file format.
+        let back = HabitatDataset::from_episodes(&episodes, &[])
+            .to_episodes()
+            .unwrap();
+        assert_eq!(back.len(), episodes.len());
+        total += episodes.len();
+    }
+    assert!(total >= 10);
+}
+
+#[test]
+fn shared_homes_oracle() {
+    let Some(dir) = sornav_test_support::shared_data("sh3d-homes") else {
+        return;
+    };
+    let config = GeneratorConfig {
+        episodes_per_category: 2,
+        seed: 5,
+        ..GeneratorConfig::default()
+    };
+    for home in ["Studio", "4BedroomHouse", "2BedroomHouseWithBasement"] {
+        let scene = Scene::from_home_xml(
+            &dir.join("homes").join(format!("{home}.xml")),
+            &dir.join("models"),
+        )
+        .unwrap();
+        let sim = simulator(scene);
+        let episodes = generate_episodes(&sim, &config).unwrap();
+        assert!(!episodes.is_empty(), "{home}: no episodes");
+        check_constraints(&sim, &episodes, &config);
+        oracle_and_stop(&sim, &episodes);
+    }
+}
+
+#[test]
+fn random_walk_hits_the_step_limit_and_taxonomy_holds() {
+    let scene = Scene::procedural(
+        4,
+        &ProceduralConfig {
+            floors: Some(1),
+            ..ProceduralConfig::default()
+        },
+    )
+    .unwrap();
+    let sim = simulator(scene);
+    let episodes = generate_episodes(
+        &sim,
+        &GeneratorConfig {
+            episodes_per_category: 1,
+            ..GeneratorConfig::default()
+        },
+    )
+    .unwrap();
+    let config = RunConfig {
+        max_actions: 60,
+        ..RunConfig::default()
+    };
+    let mut walk = RandomWalk::new(9);
+    for e in &episodes {
+        let r = run_episode(&sim, e, &mut walk, &config).unwrap();
+        assert_eq!(r.actions, 60);
+        assert!(!r.success && r.spl == 0.0);
+        let expected = if r.cross_floor {
+            Outcome::CrossFloor
+        } else {
+            Outcome::StepLimit
+        };
+        assert_eq!(r.outcome, expected);
+        assert!(r.path_length_m <= 0.25 * 60.0 + 1e-9);
+    }
+    // A zero wall-clock budget is rejected; a tiny one times out.
+    assert!(
+        run_episode(
+            &sim,
+            &episodes[0],
+            &mut walk,
+            &RunConfig {
+                wall_clock_s: 0.0,
+                ..RunConfig::default()
+            }
+        )
+        .is_err()
+    );
+    let r = run_episode(
+        &sim,
+        &episodes[0],
+        &mut RenderingWalk(RandomWalk::new(1)),
+        &RunConfig {
+            wall_clock_s: 1e-9,
+            ..RunConfig::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(r.actions, 1);
+    assert!(matches!(r.outcome, Outcome::Timeout | Outcome::CrossFloor));
+}
+
+/// A random walk that asks for frames (exercises the render path of the loop).
+struct RenderingWalk(RandomWalk);
+
+impl Policy for RenderingWalk {
+    fn act(&mut self, obs: &sornav_platform_sim::Observation<'_>) -> sornav_platform_sim::Action {
+        let f = obs.frame.expect("frames requested");
+        assert_eq!(f.depth.len(), 160 * 120);
+        self.0.act(obs)
+    }
+}

@@ -1,0 +1,226 @@
+//! Bad input: typed errors naming the element, never a panic.
+
+use std::path::{Path, PathBuf};
+
+use sornav_platform_sim::sh3d::{Sh3dOptions, home_from_xml_str, load_sh3d};
+use sornav_platform_sim::{NavError, NavMesh, NavMeshConfig, ProceduralConfig, Scene, SceneError};
+use sornav_test_support::shared_data;
+
+fn models() -> PathBuf {
+    shared_data("sh3d-homes/models").unwrap_or_else(|| PathBuf::from("/nonexistent"))
+}
+
+fn load(xml: &str) -> Result<Scene, SceneError> {
+    home_from_xml_str(xml, "test", &models(), &Sh3dOptions::default())
+}
+
+const WALLS: &str = "<home version='5500' wallHeight='250.0'>\
+  <wall id='wall0' xStart='0' yStart='0' xEnd='400' yEnd='0' height='250' thickness='10'/>\
+  <wall id='wall1' xStart='400' yStart='0' xEnd='400' yEnd='300' height='250' thickness='10'/>\
+  <room name='Kitchen'><point x='0' y='0'/><point x='400' y='0'/><point x='400' y='300'/><point x='0' y='300'/></room>\
+</home>";
+
+#[test]
+fn minimal_home_loads() {
+    let s = load(WALLS).unwrap();
+    assert_eq!(s.rooms().len(), 1);
+    assert_eq!(
+        s.rooms()[0].room_type,
+        sornav_platform_sim::RoomType::Kitchen
+    );
+}
+
+#[test]
+fn truncated_xml_names_the_open_element() {
+    let cut = &WALLS[..WALLS.len() - 30];
+    match load(cut) {
+        Err(SceneError::Xml { element, .. }) => assert!(element.is_some(), "element named"),
+        other => panic!("expected Xml error, got {other:?}"),
+    }
+    if let Some(p) = shared_data("sh3d-homes/homes/Studio.xml") {
+        let text = std::fs::read_to_string(p).unwrap();
+        assert!(matches!(
+            load(&text[..text.len() / 2]),
+            Err(SceneError::Xml { .. })
+        ));
+    }
+}
+
+#[test]
+fn garbled_xml_is_an_error() {
+    assert!(matches!(
+        load("<home><wall id='w' xStart='0' <<<>>> </home>"),
+        Err(SceneError::Xml { .. })
+    ));
+    assert!(matches!(
+        load("not xml at all"),
+        Err(SceneError::Xml { .. })
+    ));
+}
+
+#[test]
+fn nan_coordinates_name_the_element() {
+    let bad = WALLS.replace("xEnd='400' yEnd='0'", "xEnd='NaN' yEnd='0'");
+    match load(&bad) {
+        Err(SceneError::NonFinite { element, attribute }) => {
+            assert_eq!(element, "wall 'wall0'");
+            assert_eq!(attribute, "xEnd");
+        }
+        other => panic!("{other:?}"),
+    }
+    let bad = WALLS
+        .replace("thickness='10'/>\n", "")
+        .replace("xStart='400' yStart='0'", "xStart='abc' yStart='0'");
+    assert!(matches!(load(&bad), Err(SceneError::Attribute { .. })));
+}
+
+#[test]
+fn missing_model_names_the_piece() {
+    let xml = WALLS.replace(
+        "</home>",
+        "<pieceOfFurniture id='p1' name='Mystery' model='com/eteks/sweethome3d/io/resources/nope.obj' x='100' y='100' width='50' depth='50' height='50'/></home>",
+    );
+    match load(&xml) {
+        Err(SceneError::MissingModel { element, model }) => {
+            assert!(
+                element.contains("p1") || element.contains("Mystery"),
+                "{element}"
+            );
+            assert!(model.ends_with("nope.obj"));
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn empty_home_is_an_error() {
+    assert!(matches!(
+        load("<home version='5500'/>"),
+        Err(SceneError::Empty(_))
+    ));
+    assert!(matches!(load("<home></home>"), Err(SceneError::Empty(_))));
+}
+
+#[test]
+fn broken_archives_are_zip_errors() {
+    let dir = std::env::temp_dir().join(format!("sornav-bad-input-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let garbage = dir.join("garbage.sh3d");
+    std::fs::write(&garbage, b"PK\x03\x04 this is not a zip file").unwrap();
+    assert!(matches!(
+        load_sh3d(&garbage, &Sh3dOptions::default()),
+        Err(SceneError::Zip(_))
+    ));
+    if let Some(p) = shared_data("sh3d-homes/sh3d/Studio.sh3d") {
+        let bytes = std::fs::read(p).unwrap();
+        let cut = dir.join("truncated.sh3d");
+        std::fs::write(&cut, &bytes[..bytes.len() / 3]).unwrap();
+        assert!(load_sh3d(&cut, &Sh3dOptions::default()).is_err());
+    }
+    let missing = load_sh3d(Path::new("/nonexistent/home.sh3d"), &Sh3dOptions::default());
+    assert!(matches!(missing, Err(SceneError::Io { .. })));
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn nav_queries_reject_nan_and_off_mesh_points() {
+    let scene = Scene::procedural(
+        1,
+        &ProceduralConfig {
+            floors: Some(1),
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let nav = NavMesh::build(&scene, &NavMeshConfig::default()).unwrap();
+    let nan = nalgebra::Point3::new(f64::NAN, 0.0, 0.0);
+    assert!(!nav.is_navigable(&nan));
+    assert_eq!(nav.snap(&nan, 1.0), Err(NavError::NonFinite));
+    let far = nalgebra::Point3::new(1e4, 1e4, 0.0);
+    assert!(matches!(
+        nav.distance(&far, &far),
+        Err(NavError::NotNavigable { .. })
+    ));
+    assert_eq!(nav.geodesic_field(&[far]).unwrap_err(), NavError::NoGoals);
+    let bad = NavMeshConfig {
+        cell_size: -1.0,
+        ..Default::default()
+    };
+    assert!(matches!(
+        NavMesh::build(&scene, &bad),
+        Err(SceneError::Config {
+            field: "cell_size",
+            ..
+        })
+    ));
+}
+
+#[test]
+fn curved_and_sloping_walls_are_extruded() {
+    let xml = "<home version='5500' wallHeight='250.0'>\
+      <wall id='arc' xStart='0' yStart='0' xEnd='400' yEnd='0' height='250' thickness='10' arcExtent='1.5707964'/>\
+      <wall id='slope' xStart='0' yStart='300' xEnd='400' yEnd='300' height='250' heightAtEnd='100' thickness='10'/>\
+    </home>";
+    let s = load(xml).unwrap();
+    let arc = s.instances().iter().find(|i| i.name == "wall arc").unwrap();
+    // a quarter-circle arc over a 4 m chord bulges by r (1 - cos 45 deg) = 0.83 m
+    let bulge = arc.bounds.extents().y;
+    assert!((bulge - (0.828 + 0.1)).abs() < 0.06, "arc bulge {bulge}");
+    let slope = s
+        .instances()
+        .iter()
+        .find(|i| i.name == "wall slope")
+        .unwrap();
+    assert!((slope.bounds.max.z - 2.5).abs() < 1e-6);
+    // the top at the far end is 1 m high
+    let top_at_end = s
+        .triangles()
+        .iter()
+        .zip(s.triangle_instances())
+        .filter(|(_, i)| **i == slope.id)
+        .flat_map(|(t, _)| t.iter().map(|&v| s.vertices()[v as usize]))
+        .filter(|v| v[0] > 3.99)
+        .map(|v| v[2])
+        .fold(f32::MIN, f32::max);
+    assert!((top_at_end - 1.0).abs() < 1e-3, "{top_at_end}");
+}
+
+mod fuzz {
+    use proptest::prelude::*;
+    use sornav_platform_sim::obj::parse_obj;
+
+    use super::{WALLS, load};
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 200, ..ProptestConfig::default() })]
+
+        /// Random text never panics the OBJ reader; every face it returns is in range.
+        #[test]
+        fn obj_reader_never_panics(text in "(v( -?[0-9]{1,3}(\\.[0-9])?){2,3}\n|f( -?[0-9]{1,2}(/[0-9]?){0,2}){1,4}\n|usemtl x\n|#.*\n|garbage\n){0,30}") {
+            if let Ok(m) = parse_obj(&text, "fuzz.obj") {
+                prop_assert!(m.triangles.iter().flatten().all(|&i| (i as usize) < m.vertices.len()));
+            }
+        }
+
+        /// Truncating or corrupting a home anywhere gives a scene or a typed error, never a panic.
+        #[test]
+        fn home_loader_never_panics(cut in 0usize..WALLS.len(), pos in 0usize..WALLS.len(), byte in any::<u8>()) {
+            let mut bytes = WALLS.as_bytes()[..cut.max(1)].to_vec();
+            if pos < bytes.len() {
+                bytes[pos] = byte;
+            }
+            let text = String::from_utf8_lossy(&bytes);
+            let _ = load(&text);
+        }
+    }
+}
+
+#[test]
+fn huge_scenes_are_rejected_not_allocated() {
+    let xml = WALLS.replace("xEnd='400' yEnd='0'", "xEnd='4e9' yEnd='0'");
+    let s = load(&xml).unwrap();
+    assert!(matches!(
+        NavMesh::build(&s, &NavMeshConfig::default()),
+        Err(SceneError::Invalid(_))
+    ));
+}

@@ -1,0 +1,262 @@
+//! Height field and geodesic distance: properties and differential tests
+//! against brute-force references.
+
+use std::sync::OnceLock;
+
+use nalgebra::{Point2, Point3};
+use proptest::prelude::*;
+use sornav_platform_sim::geometry::MeshBuilder;
+use sornav_platform_sim::{InstanceKind, Level, NavMesh, NavMeshConfig, ProceduralConfig, Scene};
+
+fn house() -> &'static (Scene, NavMesh) {
+    static H: OnceLock<(Scene, NavMesh)> = OnceLock::new();
+    H.get_or_init(|| {
+        let s = Scene::procedural(
+            11,
+            &ProceduralConfig {
+                floors: Some(2),
+                ..Default::default()
+            },
+        )
+        .unwrap();
+        let n = NavMesh::build(&s, &NavMeshConfig::default()).unwrap();
+        (s, n)
+    })
+}
+
+/// A floor plate with boxes of random size and height on it.
+fn box_world(boxes: &[(f64, f64, f64, f64, f64)]) -> Scene {
+    let mut b = MeshBuilder::new();
+    let f = b.add_instance(InstanceKind::Floor, "floor", "floor", 0);
+    b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(4.0, 3.0, 0.0), f);
+    for &(x, y, w, d, h) in boxes {
+        let i = b.add_instance(InstanceKind::Object, "box", "box", 0);
+        b.aabb_box(Point3::new(x, y, 0.0), Point3::new(x + w, y + d, h), i);
+    }
+    let level = Level {
+        name: "0".into(),
+        elevation: 0.0,
+        height: 2.5,
+        floor_thickness: 0.1,
+    };
+    Scene::from_description(b.finish("boxes", vec![level], vec![])).unwrap()
+}
+
+fn raw_config() -> NavMeshConfig {
+    NavMeshConfig {
+        agent_radius: 0.0,
+        min_region_area: 0.0,
+        max_step: 0.0,
+        ..Default::default()
+    }
+}
+
+/// Plain Dijkstra over the span graph with an O(n^2) scan (no heap), with the
+/// same octile move rule, as the reference for the geodesic field.
+fn reference_distances(nav: &NavMesh, source: u32) -> Vec<f64> {
+    let spans = nav.spans();
+    let n = spans.len();
+    let cs = nav.config().cell_size;
+    let mut dist = vec![f64::INFINITY; n];
+    let mut done = vec![false; n];
+    dist[source as usize] = 0.0;
+    for _ in 0..n {
+        let Some(u) = (0..n)
+            .filter(|&i| !done[i] && dist[i].is_finite())
+            .min_by(|&a, &b| dist[a].total_cmp(&dist[b]))
+        else {
+            break;
+        };
+        done[u] = true;
+        let nb = spans[u].neighbours;
+        let mut moves: Vec<(usize, f64)> = nb
+            .iter()
+            .filter(|&&v| v != u32::MAX)
+            .map(|&v| (v as usize, cs))
+            .collect();
+        for d in 0..4 {
+            let e = (d + 1) % 4;
+            let (a, b) = (nb[d], nb[e]);
+            if a != u32::MAX && b != u32::MAX {
+                let (va, vb) = (
+                    spans[a as usize].neighbours[e],
+                    spans[b as usize].neighbours[d],
+                );
+                if va != u32::MAX && va == vb {
+                    moves.push((va as usize, cs * std::f64::consts::SQRT_2));
+                }
+            }
+        }
+        for (v, h) in moves {
+            let dz = f64::from(spans[v].floor - spans[u].floor);
+            let nd = dist[u] + (h * h + dz * dz).sqrt();
+            if nd < dist[v] {
+                dist[v] = nd;
+            }
+        }
+    }
+    dist
+}
+
+#[test]
+fn geodesic_field_matches_reference_dijkstra() {
+    let scene = box_world(&[
+        (1.0, 0.5, 0.6, 1.5, 1.0),
+        (2.5, 1.2, 0.4, 1.8, 0.5),
+        (0.3, 2.2, 1.0, 0.3, 0.15),
+    ]);
+    let cfg = NavMeshConfig {
+        min_region_area: 0.0,
+        ..Default::default()
+    };
+    let nav = NavMesh::build(&scene, &cfg).unwrap();
+    for src in [0u32, nav.span_count() as u32 / 2] {
+        let goal = nav.span_center(src);
+        let field = nav.geodesic_field(&[goal]).unwrap();
+        let reference = reference_distances(&nav, src);
+        for (s, r) in reference.iter().enumerate() {
+            let f = field.span_distance(s as u32);
+            assert!(
+                (f - r).abs() < 1e-9 || (f.is_infinite() && r.is_infinite()),
+                "span {s}: {f} vs {r}"
+            );
+        }
+    }
+}
+
+#[test]
+fn multi_goal_field_is_min_of_single_fields() {
+    let (_, nav) = house();
+    let goals = [
+        nav.span_center(10),
+        nav.span_center(nav.span_count() as u32 - 10),
+    ];
+    let both = nav.geodesic_field(&goals).unwrap();
+    let a = nav.geodesic_field(&goals[..1]).unwrap();
+    let b = nav.geodesic_field(&goals[1..]).unwrap();
+    for s in (0..nav.span_count() as u32).step_by(97) {
+        let m = a.span_distance(s).min(b.span_distance(s));
+        let d = both.span_distance(s);
+        assert!(
+            (d.is_infinite() && m.is_infinite()) || (d - m).abs() < 1e-9,
+            "{d} vs {m}"
+        );
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Walkable columns of a box world equal the brute-force answer: a column
+    /// is walkable at floor level iff no box overlaps its square.
+    #[test]
+    fn rasterised_floor_matches_box_overlap(
+        boxes in prop::collection::vec((0.1f64..3.0, 0.1f64..2.0, 0.1f64..1.0, 0.1f64..1.0, 0.05f64..1.5), 1..5)
+    ) {
+        let scene = box_world(&boxes);
+        let nav = NavMesh::build(&scene, &raw_config()).unwrap();
+        let cs = 0.05;
+        let o = nav.origin();
+        let (w, h) = nav.grid_size();
+        for cy in 0..h {
+            for cx in 0..w {
+                let (x0, y0) = (o.x + cx as f64 * cs, o.y + cy as f64 * cs);
+                let (xc, yc) = (x0 + cs / 2.0, y0 + cs / 2.0);
+                // keep away from exact cell boundaries of the plate and boxes
+                let near_edge = |a: f64| ((a / cs) - (a / cs).round()).abs() < 1e-6;
+                if boxes.iter().any(|b| near_edge(b.0) || near_edge(b.1) || near_edge(b.0 + b.2) || near_edge(b.1 + b.3)) {
+                    return Ok(());
+                }
+                let on_plate = xc > 0.0 && xc < 4.0 && yc > 0.0 && yc < 3.0;
+                let covered = boxes.iter().any(|b| x0 < b.0 + b.2 && b.0 < x0 + cs && y0 < b.1 + b.3 && b.1 < y0 + cs);
+                // (boxes are closed, so their interior is not walkable either)
+                let floor_walkable = nav.heights_at(xc, yc).iter().any(|z| z.abs() < 1e-4);
+                prop_assert_eq!(floor_walkable, on_plate && !covered, "column ({}, {})", cx, cy);
+            }
+        }
+    }
+
+    #[test]
+    fn geodesic_distance_is_a_metric_above_euclidean(i in 0usize..1_000_000, j in 0usize..1_000_000, k in 0usize..1_000_000) {
+        let (_, nav) = house();
+        let main = nav.largest_region().unwrap();
+        let ids: Vec<u32> = (0..nav.span_count() as u32).filter(|&s| nav.spans()[s as usize].region == main).collect();
+        let p = |n: usize| {
+            let c = nav.span_center(ids[n % ids.len()]);
+            Point3::new(c.x + 0.01, c.y - 0.01, c.z)
+        };
+        let (a, b, c) = (p(i), p(j), p(k));
+        let dab = nav.distance(&a, &b).unwrap();
+        let dba = nav.distance(&b, &a).unwrap();
+        let dbc = nav.distance(&b, &c).unwrap();
+        let dac = nav.distance(&a, &c).unwrap();
+        prop_assert_eq!(nav.distance(&a, &a).unwrap(), 0.0);
+        prop_assert!((dab - dba).abs() < 1e-6, "{} vs {}", dab, dba);
+        prop_assert!(dac <= dab + dbc + 1e-9);
+        prop_assert!(dab + 1e-9 >= (b - a).norm());
+        // the field agrees with the point-to-point query
+        let f = nav.geodesic_field(&[b]).unwrap();
+        prop_assert!((f.distance(nav, &a).unwrap() - dab).abs() < 1e-6);
+        // the path is a polyline from a to b no shorter than the distance's straight-line bound
+        let path = nav.path(&a, &b).unwrap().unwrap();
+        prop_assert_eq!(path[0], a);
+        prop_assert_eq!(*path.last().unwrap(), b);
+        prop_assert!(path.iter().all(|q| nav.is_navigable(q)));
+    }
+}
+
+#[test]
+fn erosion_keeps_agent_radius_from_walls() {
+    // a single 1 m wide corridor: after erosion by 0.18 m about 0.6 m remain
+    let scene = box_world(&[(0.0, 0.0, 4.0, 1.0, 2.0), (0.0, 2.0, 4.0, 1.0, 2.0)]);
+    let nav = NavMesh::build(
+        &scene,
+        &NavMeshConfig {
+            min_region_area: 0.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    for y in [1.05, 1.15, 1.85, 1.95] {
+        assert!(
+            !nav.is_navigable(&Point3::new(2.0, y, 0.0)),
+            "y = {y} too close to a wall"
+        );
+    }
+    for y in [1.25, 1.5, 1.75] {
+        assert!(
+            nav.is_navigable(&Point3::new(2.0, y, 0.0)),
+            "y = {y} should be free"
+        );
+    }
+    let _ = Point2::new(0.0, 0.0);
+}
+
+#[test]
+fn steps_connect_only_up_to_max_step() {
+    // platforms of 0.15 m and 0.3 m next to the floor
+    let scene = box_world(&[(1.0, 0.5, 1.0, 2.0, 0.15), (2.5, 0.5, 1.0, 2.0, 0.3)]);
+    let nav = NavMesh::build(
+        &scene,
+        &NavMeshConfig {
+            min_region_area: 0.0,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    let floor = Point3::new(0.5, 1.5, 0.0);
+    let low = Point3::new(1.5, 1.5, 0.15);
+    let high = Point3::new(3.0, 1.5, 0.3);
+    assert!(nav.connected(&floor, &low).unwrap());
+    assert!(!nav.connected(&floor, &high).unwrap());
+    assert!(nav.distance(&floor, &high).unwrap().is_infinite());
+}
+
+#[test]
+fn top_down_png_is_written() {
+    let (_, nav) = house();
+    let out = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../target/walkable_procedural_11.png");
+    nav.save_topdown_png(&out).unwrap();
+    assert!(std::fs::metadata(&out).unwrap().len() > 100);
+}

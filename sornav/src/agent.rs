@@ -1,0 +1,1001 @@
+//! The SOR-Nav agent: one instance of each component and the decision loop.
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::time::Duration;
+
+use nalgebra::{Point2, Point3};
+use serde::{Deserialize, Serialize};
+use sornav_cluster_graph::{ClusterGraph, ObjectSummary};
+use sornav_executor::{
+    AlwaysValid, Clock, ClusterId as ExecClusterId, Executor, ExecutorEvent,
+    FrontierId as ExecFrontierId, Mission, MissionId, MissionKind, MissionOutcome, MissionStatus,
+    MotionError, MotionStack, ObjectId as ExecObjectId, RobotPose, Submission,
+};
+use sornav_frontier_graph::{FrontierGraph, FrontierId, FrontierMap, NodeId};
+use sornav_semantic_map::{DepthFrame, LabelId, SemanticMap};
+use sornav_supervisor::{
+    Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject, ContextPolicy,
+    LlmPolicy, MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput,
+    Supervisor, SupervisorCommand, normalize_label,
+};
+use sornav_target_gate::{CandidateReport, GateCommand, ObjectId, TargetGate};
+use sornav_tsp::HorizonPlan;
+
+use crate::approach::approach_waypoint;
+use crate::config::{AgentConfig, PolicyConfig};
+use crate::error::AgentError;
+use crate::observation::{Observation, ObservationReport, Sensor};
+use crate::ordering::{self, OrderingInput, Route};
+use crate::snapshot::{
+    AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,
+    RelocationRecord,
+};
+use crate::target::{Target, Vocabulary};
+
+/// A context policy the agent can own.
+pub type BoxedPolicy = Box<dyn ContextPolicy + Send>;
+
+/// What the platform should do after [`Agent::step`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum AgentCommand {
+    /// Start (or restart with a new waypoint / path) this mission; it
+    /// replaces whatever the platform was doing.
+    Dispatch {
+        /// Mission id, for [`Agent::on_mission_outcome`].
+        id: MissionId,
+        /// The mission (kind, waypoint, executable path on the agent's map,
+        /// look-at point for `NAV_TO_OBJECT`).
+        mission: Mission,
+    },
+    /// Keep executing the active mission (`None`: hold position).
+    Continue {
+        /// The active mission.
+        mission: Option<MissionId>,
+    },
+    /// The robot is at a target candidate: turn toward `look_at` and send a
+    /// fresh observation; the gate confirms or rejects it.
+    Verify {
+        /// The candidate (semantic-map cluster id).
+        object: ObjectId,
+        /// Its centre.
+        look_at: Point3<f64>,
+    },
+    /// The target is confirmed: STOP (end the episode / report success).
+    Stop {
+        /// The confirmed object.
+        object: ObjectId,
+        /// Its centre.
+        centre: Point3<f64>,
+    },
+    /// Nothing left to explore and no candidate: the search is exhausted.
+    Exhausted,
+}
+
+/// The executor's clock: the reading passed to [`Agent::step`].
+#[derive(Debug, Clone, Copy, Default)]
+struct StepClock(Duration);
+
+impl Clock for StepClock {
+    fn now(&self) -> Duration {
+        self.0
+    }
+}
+
+/// The executor's motion stack: missions leave the agent through
+/// [`AgentCommand::Dispatch`], so dispatching only accepts them.
+#[derive(Debug, Clone, Copy, Default)]
+struct Outbox;
+
+impl MotionStack for Outbox {
+    fn dispatch(&mut self, _mission: &Mission) -> Result<(), MotionError> {
+        Ok(())
+    }
+    fn cancel(&mut self) {}
+}
+
+/// The current target and its gate.
+#[derive(Debug)]
+struct TargetState {
+    target: Target,
+    gate: TargetGate<String>,
+}
+
+/// The SOR-Nav agent.
+///
+/// It owns the semantic map, the frontier map (occupancy, frontiers, G_F),
+/// the cluster graph of the last step, the receding-horizon route, the
+/// target gate, the supervisor and the executor, and runs the loop of
+/// GUIDE.md section 2: [`observe`](Self::observe) every sensor frame,
+/// [`step`](Self::step) at the control rate, and report what the platform
+/// learns about missions with [`on_mission_outcome`](Self::on_mission_outcome)
+/// (arrival is also detected from the pose).
+///
+/// Maps are built only from observations; targets can change without
+/// resetting them ([`set_target`](Self::set_target)).
+pub struct Agent {
+    config: AgentConfig,
+    vocabulary: Vocabulary,
+    /// Normalised category of each label id (`None`: structure / unnamed).
+    categories: BTreeMap<LabelId, Option<String>>,
+    semantic: SemanticMap,
+    frontiers: FrontierMap,
+    supervisor: Supervisor<BoxedPolicy, Duration>,
+    executor: Executor<Outbox, StepClock>,
+    target: Option<TargetState>,
+    pose: Option<RobotPose>,
+    last_step: Option<Duration>,
+    plan: Option<HorizonPlan<FrontierId>>,
+    route: Option<Route>,
+    clusters: Option<ClusterGraph<FrontierId>>,
+    excluded: BTreeSet<FrontierId>,
+    relocation: Option<RelocationRecord>,
+    last_outcome: Option<MissionOutcome>,
+    decisions: Vec<Decision>,
+    last_decision: Option<Decision>,
+    stats: AgentStats,
+}
+
+impl std::fmt::Debug for Agent {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Agent")
+            .field("target", &self.target.as_ref().map(|t| &t.target))
+            .field("pose", &self.pose)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+fn build_policy(config: &PolicyConfig) -> Result<BoxedPolicy, AgentError> {
+    Ok(match config {
+        PolicyConfig::Commonsense(c) => Box::new(CommonsensePolicy::embedded(c.clone())?),
+        PolicyConfig::NeverRelocate => Box::new(NeverRelocate),
+        PolicyConfig::Llm(c) => Box::new(LlmPolicy::http(c.clone())?),
+    })
+}
+
+fn supervisor_kind(kind: &MissionKind) -> SupKind {
+    match kind {
+        MissionKind::Explore { .. } => SupKind::Explore,
+        MissionKind::Relocate { .. } => SupKind::Relocate,
+        MissionKind::NavToObject { .. } => SupKind::NavToObject,
+    }
+}
+
+fn lift(points: &[Point2<f64>], z: f64) -> Vec<Point3<f64>> {
+    points.iter().map(|p| Point3::new(p.x, p.y, z)).collect()
+}
+
+/// The explore mission toward frontier `id` with G_F's executable path.
+fn explore_mission(graph: &FrontierGraph, id: FrontierId, z: f64) -> Option<Mission> {
+    let node = graph.frontier(id)?;
+    let mission = Mission::new(
+        MissionKind::Explore {
+            frontier: ExecFrontierId(id.0),
+        },
+        Point3::new(node.viewpoint.x, node.viewpoint.y, z),
+    );
+    let path = graph
+        .edge(NodeId::Robot, NodeId::Frontier(id))
+        .and_then(|e| e.path_from(NodeId::Robot))
+        .filter(|p| !p.is_empty());
+    Some(match path {
+        Some(p) => mission.with_path(lift(&p, z)),
+        None => mission,
+    })
+}
+
+/// S_r and the top-K candidate clusters (Algorithm 1's inputs).
+fn region_context(
+    cg: &ClusterGraph<FrontierId>,
+    graph: &FrontierGraph,
+    objects: &[ObjectSummary],
+    excluded: &BTreeSet<FrontierId>,
+    z: f64,
+) -> RegionContext {
+    let local_context = cg
+        .robot_context(objects)
+        .objects
+        .into_iter()
+        .map(|o| ContextObject::new(o.label, o.support as f64))
+        .collect();
+    let clusters = cg
+        .top_k()
+        .iter()
+        .filter_map(|&k| {
+            let cluster = cg.cluster(k)?;
+            let reloc = cluster.relocation.as_ref()?;
+            if excluded.contains(&reloc.waypoint) {
+                return None;
+            }
+            let viewpoint = graph.frontier(reloc.waypoint)?.viewpoint;
+            let context = cg.cluster_context(k, objects).ok()?;
+            Some(ClusterCandidate {
+                candidate: Candidate {
+                    cluster_id: k.0 as u64,
+                    distance_m: reloc.cost,
+                    context: context
+                        .objects
+                        .into_iter()
+                        .map(|o| CandidateObject::new(o.label, o.support as f64, o.distance))
+                        .collect(),
+                },
+                u_geo: cluster.utility,
+                waypoint: Point3::new(viewpoint.x, viewpoint.y, z),
+            })
+        })
+        .collect();
+    RegionContext {
+        local_context,
+        clusters,
+    }
+}
+
+impl Agent {
+    /// An agent with the policy named by `config.policy`.
+    ///
+    /// # Errors
+    /// [`AgentError::Config`] for an invalid configuration, and the
+    /// components' errors when constructing them.
+    pub fn new(config: AgentConfig) -> Result<Self, AgentError> {
+        let policy = build_policy(&config.policy)?;
+        Self::with_policy(config, policy)
+    }
+
+    /// An agent with a caller-supplied context policy (for example an LLM
+    /// policy over a record/replay transport); `config.policy` is then only
+    /// recorded.
+    ///
+    /// # Errors
+    /// As [`new`](Self::new).
+    pub fn with_policy(config: AgentConfig, policy: BoxedPolicy) -> Result<Self, AgentError> {
+        config.validate()?;
+        let labels = config.label_set()?;
+        let categories = labels
+            .iter()
+            .map(|(id, name)| {
+                let category = (!labels.is_ignored(id))
+                    .then(|| normalize_label(name))
+                    .flatten();
+                (id, category)
+            })
+            .collect();
+        let vocabulary = Vocabulary::new(
+            labels
+                .iter()
+                .filter(|(id, _)| !labels.is_ignored(*id))
+                .map(|(_, name)| name),
+        );
+        let semantic = SemanticMap::new(config.semantic_map, labels)?;
+        let frontiers = FrontierMap::new(config.frontier.clone())?;
+        let supervisor = Supervisor::new(policy, config.supervisor.clone())?;
+        let executor = Executor::new(config.executor, Outbox, StepClock::default())?;
+        Ok(Self {
+            config,
+            vocabulary,
+            categories,
+            semantic,
+            frontiers,
+            supervisor,
+            executor,
+            target: None,
+            pose: None,
+            last_step: None,
+            plan: None,
+            route: None,
+            clusters: None,
+            excluded: BTreeSet::new(),
+            relocation: None,
+            last_outcome: None,
+            decisions: Vec::new(),
+            last_decision: None,
+            stats: AgentStats::default(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &AgentConfig {
+        &self.config
+    }
+
+    /// The categories targets are resolved against.
+    pub fn vocabulary(&self) -> &Vocabulary {
+        &self.vocabulary
+    }
+
+    /// The semantic map.
+    pub fn semantic_map(&self) -> &SemanticMap {
+        &self.semantic
+    }
+
+    /// The frontier map (occupancy grid, frontiers, G_F).
+    pub fn frontier_map(&self) -> &FrontierMap {
+        &self.frontiers
+    }
+
+    /// The current target.
+    pub fn target(&self) -> Option<&Target> {
+        self.target.as_ref().map(|t| &t.target)
+    }
+
+    /// The target gate of the current target.
+    pub fn gate(&self) -> Option<&TargetGate<String>> {
+        self.target.as_ref().map(|t| &t.gate)
+    }
+
+    /// The last robot pose.
+    pub fn pose(&self) -> Option<RobotPose> {
+        self.pose
+    }
+
+    /// The clock reading of the last [`step`](Self::step).
+    pub fn last_step(&self) -> Option<Duration> {
+        self.last_step
+    }
+
+    /// The active mission.
+    pub fn active_mission(&self) -> Option<(MissionId, &Mission)> {
+        self.executor.active()
+    }
+
+    /// Every decision so far, oldest first.
+    pub fn decisions(&self) -> &[Decision] {
+        &self.decisions
+    }
+
+    /// Takes the decision log (for streaming it to a file).
+    pub fn take_decisions(&mut self) -> Vec<Decision> {
+        std::mem::take(&mut self.decisions)
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> AgentStats {
+        self.stats
+    }
+
+    /// Sets the target from a category or a free-text request ("find the
+    /// television"), see [`Vocabulary::resolve`]. The maps are kept (several
+    /// targets in a row); the gate, the route and any active mission are
+    /// reset.
+    ///
+    /// # Errors
+    /// [`AgentError::UnknownTarget`]; the previous target is kept then.
+    pub fn set_target(&mut self, request: &str) -> Result<&Target, AgentError> {
+        let target = self.vocabulary.resolve(request)?;
+        let gate = TargetGate::new(target.category.clone(), self.config.gate)?;
+        self.executor.cancel();
+        self.process_events();
+        self.supervisor.reset();
+        self.plan = None;
+        self.route = None;
+        self.relocation = None;
+        let state = self.target.insert(TargetState { target, gate });
+        Ok(&state.target)
+    }
+
+    /// Integrates one observation into both maps and updates the target
+    /// gate with the clusters this frame detected.
+    ///
+    /// # Errors
+    /// [`AgentError::Observation`] for a non-finite pose, bad intrinsics,
+    /// mismatched buffers or an empty frame, and the maps' errors (for
+    /// example coordinates outside the grid's range); nothing is integrated
+    /// on error. Invalid points inside a valid frame are counted in the
+    /// report, never fused.
+    ///
+    /// # Complexity
+    /// That of the two map updates (linear in the points, plus the rays'
+    /// lengths) plus `O(c)` for `c` object clusters.
+    pub fn observe(&mut self, observation: &Observation) -> Result<ObservationReport, AgentError> {
+        if let Err(e) = observation.validate() {
+            self.stats.refused_observations += 1;
+            return Err(e.into());
+        }
+        let origin = observation.origin();
+        let (points, occupancy_rejected) = observation.occupancy_points(&self.config.depth);
+        let update = match self.frontiers.update(&origin, &points) {
+            Ok(u) => u,
+            Err(e) => {
+                self.stats.refused_observations += 1;
+                return Err(e.into());
+            }
+        };
+        let stats = match &observation.sensor {
+            Sensor::Depth(d) => self.semantic.integrate_depth(
+                &DepthFrame {
+                    camera: &d.camera,
+                    pose: &d.camera_pose,
+                    depth: &d.depth,
+                    labels: &d.labels,
+                },
+                &self.config.depth,
+            )?,
+            Sensor::Cloud(c) => self.semantic.integrate_points(&c.origin, &c.points)?,
+        };
+        let clusters = self.semantic.update_clusters();
+        self.pose = Some(observation.pose);
+        self.stats.observations += 1;
+        self.stats.rejected_points += stats.rejected() + occupancy_rejected;
+        let mut report = ObservationReport {
+            points: stats.points,
+            semantic_accepted: stats.accepted,
+            semantic_rejected: stats.rejected(),
+            occupancy_points: points.len() as u64,
+            occupancy_rejected,
+            objects: self.semantic.cluster_count(),
+            target_detections: 0,
+            frontiers_added: update.frontiers_added,
+            frontiers_removed: update.frontiers_removed,
+        };
+        if let Some(state) = self.target.as_mut() {
+            let pairs: Vec<(ObjectId, ObjectId)> = clusters
+                .retired
+                .iter()
+                .filter_map(|r| r.successor.map(|s| (ObjectId(r.id.0), ObjectId(s.0))))
+                .collect();
+            if !pairs.is_empty() {
+                state.gate.apply_remap(&pairs);
+            }
+            let now = self.semantic.integrations();
+            let reports: Vec<CandidateReport<String>> = self
+                .semantic
+                .clusters()
+                .filter_map(|c| {
+                    let category = self.categories.get(&c.label)?.as_ref()?;
+                    (*category == state.target.category).then(|| CandidateReport {
+                        object: ObjectId(c.id.0),
+                        category: category.clone(),
+                        voxels: u32::try_from(c.support).unwrap_or(u32::MAX),
+                        centre: c.centre,
+                        detected: c.last_seen == now,
+                    })
+                })
+                .collect();
+            report.target_detections = reports.iter().filter(|r| r.detected).count();
+            state.gate.update(&reports, &observation.pose.position)?;
+        }
+        Ok(report)
+    }
+
+    /// The platform's word on a mission: it reached it, failed (no path,
+    /// blocked, ...) or gave it up. Arrival is also detected from the pose
+    /// at each [`step`](Self::step), so reporting `Reached` is optional.
+    ///
+    /// # Errors
+    /// [`AgentError::UnknownMission`] when `id` is not the active mission.
+    pub fn on_mission_outcome(
+        &mut self,
+        id: MissionId,
+        status: MissionStatus,
+    ) -> Result<(), AgentError> {
+        let Some((active, mission)) = self.executor.active() else {
+            return Err(AgentError::UnknownMission(id));
+        };
+        if active != id {
+            return Err(AgentError::UnknownMission(id));
+        }
+        let kind = mission.kind;
+        // Collect earlier events first, then replace the executor's
+        // cancellation by the platform's outcome.
+        self.process_events();
+        self.executor.cancel();
+        let _cancelled = self.executor.drain_events();
+        let at = self.last_step.unwrap_or_default();
+        self.handle_outcome(MissionOutcome {
+            id,
+            kind,
+            status,
+            at,
+        });
+        Ok(())
+    }
+
+    fn process_events(&mut self) {
+        for event in self.executor.drain_events() {
+            if let ExecutorEvent::Finished(outcome) = event {
+                self.handle_outcome(outcome);
+            }
+        }
+    }
+
+    fn exclude(&mut self, frontier: FrontierId) {
+        if self.excluded.insert(frontier) {
+            self.stats.excluded_frontiers += 1;
+        }
+    }
+
+    fn handle_outcome(&mut self, outcome: MissionOutcome) {
+        let failed = matches!(outcome.status, MissionStatus::Failed(_));
+        let reached = outcome.status == MissionStatus::Reached;
+        match outcome.kind {
+            MissionKind::NavToObject { object } => {
+                if let Some(state) = self.target.as_mut() {
+                    // Wrong-phase errors mean the gate already moved on
+                    // (candidate dropped); nothing to do then.
+                    let _ = if reached {
+                        state.gate.on_arrived(ObjectId(object.0))
+                    } else if failed {
+                        state.gate.on_approach_failed(ObjectId(object.0))
+                    } else {
+                        Ok(Vec::new())
+                    };
+                }
+            }
+            MissionKind::Explore { frontier } => {
+                if failed {
+                    self.exclude(FrontierId(frontier.0));
+                }
+            }
+            MissionKind::Relocate { .. } => {
+                if let Some(r) = self.relocation.take()
+                    && r.mission == outcome.id
+                    && failed
+                {
+                    self.exclude(r.waypoint_frontier);
+                }
+            }
+        }
+        self.last_outcome = Some(outcome);
+    }
+
+    fn decide(
+        &mut self,
+        at: Duration,
+        step: DecisionStep,
+        action: &str,
+        mission: Option<MissionId>,
+        reason: impl Into<String>,
+    ) {
+        let decision = Decision {
+            at,
+            step,
+            action: action.to_owned(),
+            mission,
+            reason: reason.into(),
+        };
+        self.last_decision = Some(decision.clone());
+        self.decisions.push(decision);
+    }
+
+    /// Records a decision that keeps the active mission and returns
+    /// [`AgentCommand::Continue`].
+    fn keep_going(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        reason: impl Into<String>,
+    ) -> AgentCommand {
+        let mission = self.executor.active().map(|(id, _)| id);
+        self.decide(now, step, "continue", mission, reason);
+        AgentCommand::Continue { mission }
+    }
+
+    /// Submits `mission` (with `path` when not empty) and records the
+    /// decision; the step is `TargetAccepted` for `NAV_TO_OBJECT`,
+    /// `PolicyEvaluated` otherwise.
+    fn dispatch(
+        &mut self,
+        now: Duration,
+        mut mission: Mission,
+        path: Vec<Point3<f64>>,
+        action: &str,
+        reason: String,
+    ) -> Result<AgentCommand, AgentError> {
+        if !path.is_empty() {
+            mission = mission.with_path(path);
+        }
+        let step = match mission.kind {
+            MissionKind::NavToObject { .. } => DecisionStep::TargetAccepted,
+            _ => DecisionStep::PolicyEvaluated,
+        };
+        let cmd = self.submit(mission)?;
+        let id = self.executor.active().map(|(id, _)| id);
+        self.decide(now, step, action, id, reason);
+        Ok(cmd)
+    }
+
+    /// Submits `mission`, turning the executor's answer into a command.
+    fn submit(&mut self, mission: Mission) -> Result<AgentCommand, AgentError> {
+        let submission = self.executor.submit(mission.clone())?;
+        self.process_events();
+        Ok(match submission {
+            Submission::Started(id) | Submission::Updated(id) => {
+                self.stats.dispatched += 1;
+                AgentCommand::Dispatch { id, mission }
+            }
+            Submission::Refused { .. } => AgentCommand::Continue {
+                mission: self.executor.active().map(|(id, _)| id),
+            },
+        })
+    }
+
+    /// One decision cycle at clock reading `now` (seconds of any monotonic
+    /// clock: simulated steps or wall time).
+    ///
+    /// # Algorithm
+    /// 1. The executor checks the active mission against the last pose
+    ///    (arrival, timeout, stuck); outcomes reach the gate (arrival at a
+    ///    candidate starts verification, a failed approach rejects it) and
+    ///    failed exploration / relocation targets are excluded.
+    /// 2. Target gate first: a confirmed target gives
+    ///    [`AgentCommand::Stop`]; a candidate being verified gives
+    ///    [`AgentCommand::Verify`].
+    /// 3. G_F is brought up to date for the pose, G_C is built from it
+    ///    (`rho_c`, U_geo, top-K) and the exploration route is planned
+    ///    (receding-horizon TSP, or the configured ordering).
+    /// 4. The supervisor runs Algorithm 1: an accepted candidate (`N_obs`
+    ///    supporting observations) gives `NAV_TO_OBJECT`; an active
+    ///    relocation is kept; the rate limit keeps the active mission;
+    ///    otherwise the policy relocates to a cluster on `Conflict(g, S_r)`
+    ///    or explores the route's first frontier.
+    /// 5. The decision becomes a mission for the executor (whose
+    ///    pre-emption rules apply) and a command for the platform.
+    ///
+    /// # Errors
+    /// [`AgentError::NoTarget`], [`AgentError::NoObservation`],
+    /// [`AgentError::ClockBackwards`], and component errors.
+    ///
+    /// # Complexity
+    /// Dominated by the G_F refresh and the TSP on the `n` reachable
+    /// frontiers (see those crates), plus `O(n^2)` for G_C and `O(n M)` for
+    /// the contexts of `M` objects.
+    pub fn step(&mut self, now: Duration) -> Result<AgentCommand, AgentError> {
+        if self.target.is_none() {
+            return Err(AgentError::NoTarget);
+        }
+        let Some(pose) = self.pose else {
+            return Err(AgentError::NoObservation);
+        };
+        if let Some(previous) = self.last_step
+            && now < previous
+        {
+            return Err(AgentError::ClockBackwards { now, previous });
+        }
+        self.last_step = Some(now);
+        self.stats.steps += 1;
+        self.executor.clock_mut().0 = now;
+
+        // 1. Mission monitoring.
+        self.executor.tick(&pose, &AlwaysValid)?;
+        self.process_events();
+
+        // 2. Target gate first.
+        let gate_command = self
+            .target
+            .as_ref()
+            .map_or(GateCommand::Search, |t| t.gate.command());
+        if let Some((_, m)) = self.executor.active()
+            && let MissionKind::NavToObject { object } = m.kind
+            && !matches!(gate_command, GateCommand::NavToObject { object: o, .. } if o.0 == object.0)
+        {
+            // The gate dropped or replaced the candidate being approached.
+            self.executor.cancel();
+            self.process_events();
+        }
+        match gate_command {
+            GateCommand::Stop { object, centre } => {
+                self.decide(
+                    now,
+                    DecisionStep::TargetConfirmed,
+                    "stop",
+                    None,
+                    format!(
+                        "object {} confirmed: N_obs observations and a fresh detection after arrival",
+                        object.0
+                    ),
+                );
+                return Ok(AgentCommand::Stop { object, centre });
+            }
+            GateCommand::Verify { object, centre } => {
+                self.decide(
+                    now,
+                    DecisionStep::TargetVerification,
+                    "verify",
+                    None,
+                    format!("arrived at candidate {}: face it and observe", object.0),
+                );
+                return Ok(AgentCommand::Verify {
+                    object,
+                    look_at: centre,
+                });
+            }
+            GateCommand::Search | GateCommand::NavToObject { .. } => {}
+        }
+
+        // 3. G_F, G_C and the route.
+        let z = pose.position.z;
+        let robot_xy = Point2::new(pose.position.x, pose.position.y);
+        let objects = self.object_summaries();
+        let category = self
+            .target
+            .as_ref()
+            .map(|t| t.target.category.clone())
+            .unwrap_or_default();
+        let graph = self.frontiers.frontier_graph(&robot_xy)?;
+        if let Some((_, m)) = self.executor.active()
+            && let MissionKind::Explore { frontier } = m.kind
+            && graph.frontier(FrontierId(frontier.0)).is_none()
+        {
+            // The frontier was explored away: the mission is done.
+            self.executor.cancel();
+            for event in self.executor.drain_events() {
+                if let ExecutorEvent::Finished(outcome) = event {
+                    self.last_outcome = Some(outcome);
+                }
+            }
+        }
+        let cg = ClusterGraph::build(graph, &self.config.cluster)?;
+        let route = ordering::choose(
+            &self.config.ordering,
+            &self.config.horizon,
+            &OrderingInput {
+                graph,
+                excluded: &self.excluded,
+                robot_z: z,
+                target: &category,
+                objects: &objects,
+                n_min: self.config.cluster.n_min,
+                r_s: self.config.cluster.r_s,
+            },
+            &mut self.plan,
+        )?;
+
+        // 4. Algorithm 1.
+        let mission = match self.executor.active() {
+            Some((id, m)) => MissionState {
+                id: id.0,
+                kind: supervisor_kind(&m.kind),
+            },
+            None => MissionState {
+                id: 0,
+                kind: SupKind::Idle,
+            },
+        };
+        let target_accepted = match gate_command {
+            GateCommand::NavToObject { object, .. } => Some(object.0),
+            _ => None,
+        };
+        let input = StepInput {
+            target: &category,
+            target_accepted,
+            mission,
+            first_frontier: route
+                .as_ref()
+                .map(|r| Point3::new(r.first_viewpoint.x, r.first_viewpoint.y, z)),
+        };
+        let excluded = &self.excluded;
+        let command = self.supervisor.step(now, &input, || {
+            region_context(&cg, graph, &objects, excluded, z)
+        })?;
+
+        // 5. Decision -> mission -> command.
+        let active = self.executor.active().map(|(id, m)| (id, m.kind));
+        let explore = match (&command, &route) {
+            (SupervisorCommand::Explore { .. }, Some(r)) => explore_mission(graph, r.first, z),
+            _ => None,
+        };
+        let relocation = match &command {
+            SupervisorCommand::Relocate { cluster_id, .. } => {
+                usize::try_from(*cluster_id).ok().and_then(|k| {
+                    let cluster = cg.cluster(sornav_cluster_graph::ClusterId(k))?;
+                    let reloc = cluster.relocation.as_ref()?;
+                    let vp = graph.frontier(reloc.waypoint)?.viewpoint;
+                    Some((
+                        cluster.members.clone(),
+                        reloc.waypoint,
+                        Point3::new(vp.x, vp.y, z),
+                        lift(&reloc.path, z),
+                    ))
+                })
+            }
+            _ => None,
+        };
+        self.route = route;
+        self.clusters = Some(cg);
+        let result = match command {
+            SupervisorCommand::NavToObject { target_id } => {
+                let object = ExecObjectId(target_id);
+                if active.is_some_and(|(_, k)| k == MissionKind::NavToObject { object }) {
+                    self.keep_going(
+                        now,
+                        DecisionStep::TargetAccepted,
+                        format!("approaching candidate {target_id}"),
+                    )
+                } else {
+                    self.dispatch_approach(now, target_id, &pose)?
+                }
+            }
+            SupervisorCommand::KeepRelocation => {
+                let reason = self
+                    .relocation
+                    .as_ref()
+                    .map_or_else(String::new, |r| r.reason.clone());
+                self.keep_going(
+                    now,
+                    DecisionStep::RelocationActive,
+                    format!("relocation under way: {reason}"),
+                )
+            }
+            SupervisorCommand::ContinueMission => {
+                self.keep_going(now, DecisionStep::RateLimited, "supervisor rate limit")
+            }
+            SupervisorCommand::Relocate { reason, .. } => {
+                self.stats.policy_evaluations += 1;
+                match relocation {
+                    Some((members, waypoint_frontier, waypoint, path)) => {
+                        let key = members.first().map_or(0, |f| f.0);
+                        let mission = Mission::new(
+                            MissionKind::Relocate {
+                                cluster: ExecClusterId(key),
+                            },
+                            waypoint,
+                        );
+                        let cmd = self.dispatch(now, mission, path, "relocate", reason.clone())?;
+                        if let AgentCommand::Dispatch { id, .. } = &cmd {
+                            self.stats.relocations += 1;
+                            self.relocation = Some(RelocationRecord {
+                                mission: *id,
+                                cluster_key: key,
+                                members,
+                                waypoint_frontier,
+                                reason,
+                            });
+                        }
+                        cmd
+                    }
+                    None => self.keep_going(
+                        now,
+                        DecisionStep::PolicyEvaluated,
+                        format!("relocation target vanished ({reason})"),
+                    ),
+                }
+            }
+            SupervisorCommand::Explore { reason, .. } => {
+                self.stats.policy_evaluations += 1;
+                match explore {
+                    Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => {
+                        self.dispatch(now, mission, Vec::new(), "explore", reason)?
+                    }
+                    Some(_) => self.keep_going(now, DecisionStep::PolicyEvaluated, reason),
+                    None if active.is_none() => {
+                        self.decide(
+                            now,
+                            DecisionStep::PolicyEvaluated,
+                            "exhausted",
+                            None,
+                            format!("no reachable frontier ({reason})"),
+                        );
+                        AgentCommand::Exhausted
+                    }
+                    None => self.keep_going(
+                        now,
+                        DecisionStep::PolicyEvaluated,
+                        format!("no reachable frontier; finishing the active mission ({reason})"),
+                    ),
+                }
+            }
+        };
+        Ok(result)
+    }
+
+    /// Dispatches `NAV_TO_OBJECT` toward candidate `target_id`, or rejects
+    /// the candidate when no approach waypoint is reachable.
+    fn dispatch_approach(
+        &mut self,
+        now: Duration,
+        target_id: u64,
+        pose: &RobotPose,
+    ) -> Result<AgentCommand, AgentError> {
+        let gate_centre = self
+            .target
+            .as_ref()
+            .and_then(|t| t.gate.tracker().track(ObjectId(target_id)))
+            .map(|t| t.centre);
+        let bounds = self
+            .semantic
+            .cluster(sornav_semantic_map::ClusterId(target_id))
+            .map(|c| (c.bounds.min, c.bounds.max));
+        let Some(centre) = gate_centre else {
+            return Ok(AgentCommand::Continue { mission: None });
+        };
+        let (lo, hi) = bounds.unwrap_or((centre, centre));
+        let robot = Point2::new(pose.position.x, pose.position.y);
+        let approach = approach_waypoint(
+            &mut self.frontiers,
+            robot,
+            (Point2::new(lo.x, lo.y), Point2::new(hi.x, hi.y)),
+            &self.config.approach,
+        )?;
+        let z = pose.position.z;
+        match approach {
+            Some((waypoint, path)) => {
+                let mission = Mission::new(
+                    MissionKind::NavToObject {
+                        object: ExecObjectId(target_id),
+                    },
+                    Point3::new(waypoint.x, waypoint.y, z),
+                )
+                .with_look_at(centre);
+                self.dispatch(
+                    now,
+                    mission,
+                    lift(&path, z),
+                    "nav_to_object",
+                    format!("candidate {target_id} has N_obs supporting observations"),
+                )
+            }
+            None => {
+                self.stats.unreachable_candidates += 1;
+                if let Some(state) = self.target.as_mut() {
+                    let _ = state.gate.on_approach_failed(ObjectId(target_id));
+                }
+                self.decide(
+                    now,
+                    DecisionStep::TargetAccepted,
+                    "reject_candidate",
+                    None,
+                    format!("candidate {target_id}: no reachable approach waypoint"),
+                );
+                Ok(AgentCommand::Continue {
+                    mission: self.executor.active().map(|(id, _)| id),
+                })
+            }
+        }
+    }
+
+    /// Objects of the semantic map with their normalised categories.
+    fn object_summaries(&self) -> Vec<ObjectSummary> {
+        self.semantic
+            .clusters()
+            .filter_map(|c| {
+                let label = self.categories.get(&c.label)?.clone()?;
+                Some(ObjectSummary {
+                    label,
+                    support: c.support,
+                    centre: c.centre,
+                })
+            })
+            .collect()
+    }
+
+    /// Everything needed to draw the agent's state: occupancy, objects,
+    /// frontiers, clusters, route, active mission, gate, last decision.
+    ///
+    /// # Complexity
+    /// O(grid cells + objects + frontier cells + clusters).
+    pub fn snapshot(&self) -> AgentSnapshot {
+        AgentSnapshot {
+            target: self.target.as_ref().map(|t| t.target.clone()),
+            pose: self.pose,
+            at: self.last_step,
+            occupancy: OccupancyRaster::from_grid(self.frontiers.grid()),
+            objects: self
+                .semantic
+                .clusters()
+                .map(|c| ObjectRecord {
+                    id: c.id.0,
+                    label: self.categories.get(&c.label).cloned().flatten(),
+                    support: c.support,
+                    centre: c.centre,
+                    min: c.bounds.min,
+                    max: c.bounds.max,
+                    observations: c.observations,
+                })
+                .collect(),
+            frontiers: self.frontiers.graph().nodes().cloned().collect(),
+            clusters: self.clusters.clone(),
+            route: self.route.clone(),
+            active_mission: self.executor.active().map(|(id, m)| (id, m.clone())),
+            relocation: self.relocation.clone(),
+            gate_phase: self.target.as_ref().map(|t| t.gate.phase()),
+            candidates: self
+                .target
+                .as_ref()
+                .map(|t| t.gate.tracker().tracks().cloned().collect())
+                .unwrap_or_default(),
+            excluded_frontiers: self.excluded.iter().copied().collect(),
+            last_outcome: self.last_outcome.clone(),
+            last_decision: self.last_decision.clone(),
+            stats: self.stats,
+        }
+    }
+}

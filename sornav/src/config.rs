@@ -1,0 +1,447 @@
+//! [`AgentConfig`]: every parameter of the paper in one serde/TOML document,
+//! composed of the components' own configuration types.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use sornav_cluster_graph::ClusterConfig;
+use sornav_executor::ExecutorConfig;
+use sornav_frontier_graph::FrontierMapConfig;
+use sornav_semantic_map::{DepthOptions, LabelId, LabelSet, MapConfig};
+use sornav_supervisor::{CommonsenseConfig, LlmConfig, SupervisorConfig};
+use sornav_target_gate::GateConfig;
+use sornav_tsp::RecedingHorizon;
+
+use crate::error::ConfigError;
+
+/// One entry of the label vocabulary: a semantic-camera / LiDAR label id,
+/// its name, and whether it is structure (wall, floor, ...) rather than an
+/// object.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct LabelEntry {
+    /// Label id as produced by the sensor.
+    pub id: u16,
+    /// Name; object names are normalised with the supervisor's
+    /// `normalize_label` ("tv" and "television" are `tv_monitor`).
+    pub name: String,
+    /// Structure, not an object: never clustered into objects.
+    #[serde(default)]
+    pub ignored: bool,
+}
+
+/// Which context policy the supervisor asks (Algorithm 1, line "policy").
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum PolicyConfig {
+    /// The embedded HM3D co-occurrence prior; relocates on `Conflict(g, S_r)`.
+    Commonsense(CommonsenseConfig),
+    /// Never relocate (the paper's first ablation).
+    NeverRelocate,
+    /// An OpenAI-compatible LLM endpoint.
+    Llm(LlmConfig),
+}
+
+impl Default for PolicyConfig {
+    fn default() -> Self {
+        Self::Commonsense(CommonsenseConfig::default())
+    }
+}
+
+/// How the next exploration frontier is chosen when the supervisor says
+/// "explore".
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum FrontierOrdering {
+    #[default]
+    /// SOR-Nav: first frontier of the open-path TSP route through all
+    /// frontiers, with the nearby-frontier replacement rule.
+    Tsp,
+    /// The cheapest frontier by graph cost (classic frontier exploration, the
+    /// paper's second ablation).
+    Nearest,
+    /// ESC / L3MVN-style greedy semantic ranking: every frontier scored by
+    /// `relevance_weight * P(g | objects within R_s) - distance_weight * cost`.
+    SemanticRanking(SemanticRankingConfig),
+}
+
+/// Weights of [`FrontierOrdering::SemanticRanking`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SemanticRankingConfig {
+    /// Score per unit of commonsense relevance `P(g | S)` (metres of detour
+    /// a certain relevance is worth). Default 10.
+    pub relevance_weight: f64,
+    /// Score lost per metre of path. Default 1.
+    pub distance_weight: f64,
+}
+
+impl Default for SemanticRankingConfig {
+    fn default() -> Self {
+        Self {
+            relevance_weight: 10.0,
+            distance_weight: 1.0,
+        }
+    }
+}
+
+/// How a `NAV_TO_OBJECT` waypoint is placed next to a confirmed-candidate
+/// object.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ApproachConfig {
+    /// Largest horizontal distance (m) from the waypoint to the object's
+    /// bounds. Default 0.45: with the executor's 0.5 m arrival radius the
+    /// robot ends within 0.95 m of the object (the report criterion is 1 m).
+    pub standoff_m: f64,
+    /// Spacing (m) of the candidate waypoints sampled around the object.
+    /// Default 0.1.
+    pub sample_step_m: f64,
+    /// Candidate waypoints tested for a path, nearest first. Default 8.
+    pub max_path_queries: usize,
+}
+
+impl Default for ApproachConfig {
+    fn default() -> Self {
+        Self {
+            standoff_m: 0.45,
+            sample_step_m: 0.1,
+            max_path_queries: 8,
+        }
+    }
+}
+
+/// The agents compared by the evaluation (issue 9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Variant {
+    /// Context gate + TSP ordering + commonsense policy.
+    Sornav,
+    /// NeverRelocate, TSP ordering kept.
+    NoGate,
+    /// No gate, nearest reachable frontier.
+    NearestFrontier,
+    /// No gate, greedy semantic frontier ranking.
+    SemanticRanking,
+    /// The simulator's ground-truth oracle (upper bound); not an agent.
+    Oracle,
+}
+
+impl Variant {
+    /// All five, in the evaluation's order.
+    pub const ALL: [Variant; 5] = [
+        Variant::Sornav,
+        Variant::NoGate,
+        Variant::NearestFrontier,
+        Variant::SemanticRanking,
+        Variant::Oracle,
+    ];
+
+    /// The command-line name (`sornav`, `no-gate`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            Variant::Sornav => "sornav",
+            Variant::NoGate => "no-gate",
+            Variant::NearestFrontier => "nearest-frontier",
+            Variant::SemanticRanking => "semantic-ranking",
+            Variant::Oracle => "oracle",
+        }
+    }
+
+    /// Parses a command-line name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        Self::ALL.into_iter().find(|v| v.name() == name)
+    }
+}
+
+/// Every parameter of the SOR-Nav agent (GUIDE.md section 3), composed of
+/// the components' own configuration types. Missing fields take the paper's
+/// defaults; unknown top-level fields are an error.
+///
+/// | paper symbol | field |
+/// |---|---|
+/// | voxel size | `semantic_map.resolution`, `frontier.grid.resolution` |
+/// | `N_min` | `cluster.n_min`, `gate.n_min` (and `policy.min_support`) |
+/// | `N_obs`, `N_miss` | `gate.n_obs`, `gate.n_miss` |
+/// | `rho_c`, `eta`, `K` | `cluster.rho_c`, `cluster.eta`, `cluster.top_k` (= `supervisor.top_k`) |
+/// | `R_s`, `R_r` | `cluster.r_s`, `cluster.r_r` |
+/// | replacement rule | `horizon.rule.radius`, `horizon.rule.leg_ratio` |
+/// | supervisor rate | `supervisor.interval_s`; LLM: `policy.min_interval_s` |
+/// | depth window | `depth.min_depth`, `depth.max_depth` |
+/// | agent radius / height | `frontier.grid.robot_radius`, `frontier.grid.robot_height` |
+/// | edge cost | `frontier.graph.displacement_weight` (0: path length) |
+///
+/// # Example
+/// ```
+/// use sornav::{AgentConfig, Variant};
+///
+/// let text = include_str!("../config/agent.example.toml");
+/// let config = AgentConfig::from_toml(text)?;
+/// assert_eq!(config.gate.n_obs, 3);
+/// assert_eq!(config.cluster.rho_c, 25.0);
+/// let ablation = AgentConfig::for_variant(Variant::NoGate)?;
+/// assert!(ablation.validate().is_ok());
+/// # Ok::<(), sornav::ConfigError>(())
+/// ```
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AgentConfig {
+    /// Label vocabulary of the sensor (default: the household set of the
+    /// procedural houses).
+    pub labels: Vec<LabelEntry>,
+    /// Semantic voxel map (voxel size 0.05 m).
+    pub semantic_map: MapConfig,
+    /// Depth window and pixel stride for depth frames (0.5-5 m).
+    pub depth: DepthOptions,
+    /// Occupancy grid, frontiers and the decision graph G_F.
+    pub frontier: FrontierMapConfig,
+    /// Frontier clusters, U_geo ranking and semantic contexts.
+    pub cluster: ClusterConfig,
+    /// Target gate (N_min, N_obs, N_miss, verification).
+    pub gate: GateConfig,
+    /// Receding-horizon TSP and the replacement rule.
+    pub horizon: RecedingHorizon,
+    /// Frontier ordering.
+    pub ordering: FrontierOrdering,
+    /// Supervisor rate and K.
+    pub supervisor: SupervisorConfig,
+    /// Context policy.
+    pub policy: PolicyConfig,
+    /// Mission executor (arrival, timeouts, stuck detection).
+    pub executor: ExecutorConfig,
+    /// Placement of `NAV_TO_OBJECT` waypoints.
+    pub approach: ApproachConfig,
+}
+
+impl Default for AgentConfig {
+    fn default() -> Self {
+        Self {
+            labels: household_labels(),
+            semantic_map: MapConfig::default(),
+            depth: DepthOptions::default(),
+            frontier: FrontierMapConfig::default(),
+            cluster: ClusterConfig::default(),
+            gate: GateConfig::default(),
+            horizon: RecedingHorizon::default(),
+            ordering: FrontierOrdering::default(),
+            supervisor: SupervisorConfig::default(),
+            policy: PolicyConfig::default(),
+            executor: ExecutorConfig::default(),
+            approach: ApproachConfig::default(),
+        }
+    }
+}
+
+/// The household vocabulary of `sornav-semantic-map` as entries.
+fn household_labels() -> Vec<LabelEntry> {
+    let set = LabelSet::household();
+    set.iter()
+        .map(|(id, name)| LabelEntry {
+            id: id.0,
+            name: name.to_owned(),
+            ignored: set.is_ignored(id),
+        })
+        .collect()
+}
+
+fn component(component: &'static str, e: impl std::fmt::Display) -> ConfigError {
+    ConfigError::Component {
+        component,
+        message: e.to_string(),
+    }
+}
+
+fn agree(parameter: &'static str, a: (&str, f64), b: (&str, f64)) -> Result<(), ConfigError> {
+    if a.1 == b.1 {
+        Ok(())
+    } else {
+        Err(ConfigError::Inconsistent {
+            parameter,
+            message: format!("{} = {} but {} = {}", a.0, a.1, b.0, b.1),
+        })
+    }
+}
+
+impl AgentConfig {
+    /// The configuration of an evaluation variant.
+    ///
+    /// # Errors
+    /// [`ConfigError::NotAnAgentVariant`] for [`Variant::Oracle`]: the oracle
+    /// follows the simulator's ground truth, which the agent never sees; the
+    /// simulator harness runs it directly.
+    pub fn for_variant(variant: Variant) -> Result<Self, ConfigError> {
+        let mut c = Self::default();
+        match variant {
+            Variant::Sornav => {}
+            Variant::NoGate => c.policy = PolicyConfig::NeverRelocate,
+            Variant::NearestFrontier => {
+                c.policy = PolicyConfig::NeverRelocate;
+                c.ordering = FrontierOrdering::Nearest;
+            }
+            Variant::SemanticRanking => {
+                c.policy = PolicyConfig::NeverRelocate;
+                c.ordering = FrontierOrdering::SemanticRanking(SemanticRankingConfig::default());
+            }
+            Variant::Oracle => {
+                return Err(ConfigError::NotAnAgentVariant(
+                    "oracle",
+                    "it reads the simulator's ground truth; run it in the simulator harness",
+                ));
+            }
+        }
+        Ok(c)
+    }
+
+    /// Parses and validates a TOML document.
+    ///
+    /// # Errors
+    /// [`ConfigError::Toml`] for malformed TOML or unknown fields, and every
+    /// error of [`validate`](Self::validate).
+    pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
+        let config: Self = toml::from_str(text)?;
+        config.validate()?;
+        Ok(config)
+    }
+
+    /// Reads, parses and validates a TOML file.
+    ///
+    /// # Errors
+    /// [`ConfigError::Io`] and those of [`from_toml`](Self::from_toml).
+    pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: path.display().to_string(),
+            source,
+        })?;
+        Self::from_toml(&text)
+    }
+
+    /// The configuration as a TOML document (complete: every field).
+    ///
+    /// # Errors
+    /// [`ConfigError::TomlSer`] (not expected for valid configurations).
+    pub fn to_toml(&self) -> Result<String, ConfigError> {
+        Ok(toml::to_string(self)?)
+    }
+
+    /// The label vocabulary as the semantic map's [`LabelSet`].
+    ///
+    /// # Errors
+    /// [`ConfigError::Labels`] for a duplicate id, a duplicate name or an
+    /// empty name.
+    pub fn label_set(&self) -> Result<LabelSet, ConfigError> {
+        let mut set = LabelSet::new();
+        let mut ids = std::collections::BTreeSet::new();
+        for e in &self.labels {
+            if !ids.insert(e.id) {
+                return Err(ConfigError::Labels(format!("label id {} repeats", e.id)));
+            }
+            set.insert(LabelId(e.id), &e.name, e.ignored)
+                .map_err(|err| ConfigError::Labels(err.to_string()))?;
+        }
+        Ok(set)
+    }
+
+    /// Checks every component's ranges and that components sharing a paper
+    /// parameter agree on it (voxel size, `N_min`, `K`, `R_s`).
+    ///
+    /// # Errors
+    /// [`ConfigError::Component`], [`ConfigError::Inconsistent`] or
+    /// [`ConfigError::Labels`].
+    pub fn validate(&self) -> Result<(), ConfigError> {
+        self.label_set()?;
+        self.semantic_map
+            .validate()
+            .map_err(|e| component("semantic_map", e))?;
+        let d = &self.depth;
+        if !(d.min_depth.is_finite() && d.max_depth.is_finite())
+            || d.min_depth < 0.0
+            || d.max_depth <= d.min_depth
+            || d.stride == 0
+        {
+            return Err(component(
+                "depth",
+                "need finite 0 <= min_depth < max_depth and stride >= 1",
+            ));
+        }
+        self.frontier
+            .validate()
+            .map_err(|e| component("frontier", e))?;
+        self.cluster
+            .validate()
+            .map_err(|e| component("cluster", e))?;
+        self.gate.validate().map_err(|e| component("gate", e))?;
+        self.horizon
+            .rule
+            .validate()
+            .map_err(|e| component("horizon", e))?;
+        self.horizon
+            .solver
+            .validate()
+            .map_err(|e| component("horizon", e))?;
+        if !(self.supervisor.interval_s.is_finite() && self.supervisor.interval_s >= 0.0)
+            || self.supervisor.top_k == 0
+        {
+            return Err(component(
+                "supervisor",
+                "interval_s must be finite and >= 0, top_k >= 1",
+            ));
+        }
+        match &self.policy {
+            PolicyConfig::Commonsense(c) => {
+                c.validate().map_err(|e| component("policy", e))?;
+                agree(
+                    "R_s",
+                    ("cluster.r_s", self.cluster.r_s),
+                    ("policy.candidate_radius_m", c.candidate_radius_m),
+                )?;
+                agree(
+                    "N_min",
+                    ("cluster.n_min", self.cluster.n_min as f64),
+                    ("policy.min_support", c.min_support),
+                )?;
+            }
+            PolicyConfig::NeverRelocate => {}
+            PolicyConfig::Llm(c) => c.validate().map_err(|e| component("policy", e))?,
+        }
+        if let FrontierOrdering::SemanticRanking(s) = &self.ordering {
+            let ok = |v: f64| v.is_finite() && v >= 0.0;
+            if !(ok(s.relevance_weight) && ok(s.distance_weight)) {
+                return Err(component(
+                    "ordering",
+                    "semantic ranking weights must be finite and >= 0",
+                ));
+            }
+        }
+        self.executor
+            .validate()
+            .map_err(|e| component("executor", e))?;
+        let a = &self.approach;
+        let positive = |v: f64| v.is_finite() && v > 0.0;
+        if !(positive(a.standoff_m) && positive(a.sample_step_m))
+            || a.standoff_m / a.sample_step_m > 200.0
+            || a.max_path_queries == 0
+        {
+            return Err(component(
+                "approach",
+                "need standoff_m > 0, sample_step_m > 0, at most 200 samples per axis, max_path_queries >= 1",
+            ));
+        }
+        agree(
+            "voxel size",
+            ("semantic_map.resolution", self.semantic_map.resolution),
+            ("frontier.grid.resolution", self.frontier.grid.resolution),
+        )?;
+        agree(
+            "N_min",
+            ("cluster.n_min", self.cluster.n_min as f64),
+            ("gate.n_min", f64::from(self.gate.n_min)),
+        )?;
+        agree(
+            "K",
+            ("cluster.top_k", self.cluster.top_k as f64),
+            ("supervisor.top_k", self.supervisor.top_k as f64),
+        )?;
+        Ok(())
+    }
+}

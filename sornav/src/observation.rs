@@ -1,0 +1,186 @@
+//! What the platform tells the agent: the robot pose and one sensor frame.
+
+use nalgebra::{Isometry3, Point3};
+use serde::{Deserialize, Serialize};
+use sornav_executor::RobotPose;
+use sornav_semantic_map::{DepthOptions, LabelId, LabeledPoint, PinholeCamera};
+
+use crate::error::ObservationError;
+
+/// One labelled depth image with pinhole intrinsics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DepthObservation {
+    /// Intrinsics and image size.
+    pub camera: PinholeCamera,
+    /// Camera-to-world pose of the optical frame (z forward, x right, y
+    /// down; see `sornav_semantic_map::optical_pose`).
+    pub camera_pose: Isometry3<f64>,
+    /// `width * height` z-depths (m), row-major; 0, NaN or infinity mark a
+    /// missing return.
+    pub depth: Vec<f32>,
+    /// `width * height` semantic labels, row-major.
+    pub labels: Vec<LabelId>,
+}
+
+/// A labelled point cloud already in the world frame (LiDAR plus a
+/// segmentation, or a fused cloud).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CloudObservation {
+    /// Sensor origin (world frame) the rays start from.
+    pub origin: Point3<f64>,
+    /// Labelled world-frame returns.
+    pub points: Vec<LabeledPoint>,
+}
+
+/// The sensor part of an [`Observation`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub enum Sensor {
+    /// A depth + semantic image.
+    Depth(DepthObservation),
+    /// A labelled world-frame cloud.
+    Cloud(CloudObservation),
+}
+
+/// One observation: the robot's base pose (on the floor, yaw about z) and
+/// the sensor frame taken there.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Observation {
+    /// Robot base pose.
+    pub pose: RobotPose,
+    /// The sensor frame.
+    pub sensor: Sensor,
+}
+
+/// What [`Agent::observe`](crate::Agent::observe) did with an observation.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ObservationReport {
+    /// Points (or visited pixels) in the frame.
+    pub points: u64,
+    /// Points fused into the semantic map.
+    pub semantic_accepted: u64,
+    /// Points the semantic map rejected (non-finite, out of range or
+    /// bounds), counted, never fused.
+    pub semantic_rejected: u64,
+    /// Points given to the occupancy grid.
+    pub occupancy_points: u64,
+    /// Points kept out of the occupancy grid (non-finite, or a missing /
+    /// too-near depth).
+    pub occupancy_rejected: u64,
+    /// Object clusters after the update.
+    pub objects: usize,
+    /// Clusters of the target category detected in this frame.
+    pub target_detections: usize,
+    /// Frontiers added by the update.
+    pub frontiers_added: usize,
+    /// Frontiers removed by the update.
+    pub frontiers_removed: usize,
+}
+
+fn finite3(p: &Point3<f64>) -> bool {
+    p.x.is_finite() && p.y.is_finite() && p.z.is_finite()
+}
+
+impl Observation {
+    /// Checks the pose, intrinsics and buffer sizes.
+    ///
+    /// # Errors
+    /// The matching [`ObservationError`].
+    pub fn validate(&self) -> Result<(), ObservationError> {
+        if !self.pose.is_finite() {
+            return Err(ObservationError::NonFinitePose);
+        }
+        match &self.sensor {
+            Sensor::Depth(d) => {
+                d.camera
+                    .validate()
+                    .map_err(|e| ObservationError::InvalidIntrinsics(e.to_string()))?;
+                let pose = &d.camera_pose;
+                if !(pose.translation.vector.iter().all(|c| c.is_finite())
+                    && pose.rotation.coords.iter().all(|c| c.is_finite()))
+                {
+                    return Err(ObservationError::NonFiniteSensorPose);
+                }
+                let n = (d.camera.width as usize).checked_mul(d.camera.height as usize);
+                if n != Some(d.depth.len()) || n != Some(d.labels.len()) {
+                    return Err(ObservationError::FrameSize {
+                        width: d.camera.width,
+                        height: d.camera.height,
+                        depth: d.depth.len(),
+                        labels: d.labels.len(),
+                    });
+                }
+                if n == Some(0) {
+                    return Err(ObservationError::Empty);
+                }
+            }
+            Sensor::Cloud(c) => {
+                if !finite3(&c.origin) {
+                    return Err(ObservationError::NonFiniteSensorPose);
+                }
+                if c.points.is_empty() {
+                    return Err(ObservationError::Empty);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The sensor origin of the frame.
+    pub fn origin(&self) -> Point3<f64> {
+        match &self.sensor {
+            Sensor::Depth(d) => Point3::from(d.camera_pose.translation.vector),
+            Sensor::Cloud(c) => c.origin,
+        }
+    }
+
+    /// The frame's returns as world points for the occupancy grid, and the
+    /// number left out.
+    ///
+    /// Depth pixels are back-projected with the depth window's stride; a
+    /// depth below `min_depth`, zero, NaN or infinite is left out (no
+    /// information); a depth beyond `max_depth` is kept (the grid only
+    /// carves free space along returns beyond its range). Non-finite cloud
+    /// points are left out.
+    ///
+    /// # Complexity
+    /// O(pixels / stride^2) or O(points).
+    pub fn occupancy_points(&self, options: &DepthOptions) -> (Vec<Point3<f64>>, u64) {
+        let mut rejected = 0;
+        let points = match &self.sensor {
+            Sensor::Depth(d) => {
+                let stride = options.stride.max(1) as usize;
+                let (w, h) = (d.camera.width as usize, d.camera.height as usize);
+                let mut out = Vec::with_capacity((w / stride + 1) * (h / stride + 1));
+                for v in (0..h).step_by(stride) {
+                    for u in (0..w).step_by(stride) {
+                        let z = f64::from(d.depth[v * w + u]);
+                        if !(z.is_finite() && z > 0.0 && z >= options.min_depth) {
+                            rejected += 1;
+                            continue;
+                        }
+                        let local = d.camera.back_project(u as f64, v as f64, z);
+                        out.push(d.camera_pose * local);
+                    }
+                }
+                out
+            }
+            Sensor::Cloud(c) => {
+                let mut out = Vec::with_capacity(c.points.len());
+                for p in &c.points {
+                    let q = Point3::new(
+                        f64::from(p.position.x),
+                        f64::from(p.position.y),
+                        f64::from(p.position.z),
+                    );
+                    if finite3(&q) {
+                        out.push(q);
+                    } else {
+                        rejected += 1;
+                    }
+                }
+                out
+            }
+        };
+        (points, rejected)
+    }
+}

@@ -1,0 +1,209 @@
+//! The agent's decision loop on a scripted two-room layout: exploration
+//! toward frontiers, target confirmation only after N_obs observations and
+//! navigation verification, and Algorithm 1's ordering in the decision log.
+
+mod common;
+
+use common::{Robot, World, object, run, wall};
+use nalgebra::Point2;
+use sornav::{Agent, AgentCommand, AgentConfig, DecisionStep};
+
+const BED: u16 = 12;
+const SOFA: u16 = 13;
+const TV: u16 = 15;
+
+/// Two 6 m x 4 m rooms joined by a 1 m door in the wall at x = 6; the TV
+/// hangs on the north wall of the east room, out of sight and range from
+/// the start in the west room.
+fn two_rooms() -> World {
+    World {
+        blocks: vec![
+            wall(-0.1, -0.1, 12.1, 0.1),
+            wall(-0.1, 3.9, 12.1, 4.1),
+            wall(-0.1, -0.1, 0.1, 4.1),
+            wall(11.9, -0.1, 12.1, 4.1),
+            wall(5.9, -0.1, 6.1, 1.5),
+            wall(5.9, 2.5, 6.1, 4.1),
+            object(BED, 0.5, 2.5, 2.5, 3.8, 0.0, 0.6),
+            object(SOFA, 8.0, 0.3, 10.0, 1.1, 0.0, 0.8),
+            object(TV, 10.2, 3.7, 10.8, 3.89, 0.5, 1.1),
+        ],
+    }
+}
+
+#[test]
+fn explores_through_the_door_and_confirms_the_target() {
+    let world = two_rooms();
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("find the television").unwrap();
+    let mut robot = Robot::new(3.5, 1.5);
+    let episode = run(&mut agent, &world, &mut robot, 400);
+
+    // Exploration missions toward frontiers come first.
+    let first = episode
+        .commands
+        .iter()
+        .find_map(|c| match c {
+            AgentCommand::Dispatch { mission, .. } => Some(mission.clone()),
+            _ => None,
+        })
+        .expect("a mission was dispatched");
+    assert_eq!(first.kind.name(), "explore");
+    let explore_count = episode
+        .commands
+        .iter()
+        .filter(|c| matches!(c, AgentCommand::Dispatch { mission, .. } if mission.kind.name() == "explore"))
+        .count();
+    assert!(explore_count >= 1);
+
+    // STOP at the TV.
+    let (object, centre) = episode.stop.expect("target found and confirmed");
+    assert!(
+        (centre.x - 10.5).abs() < 0.5 && (centre.y - 3.8).abs() < 0.5,
+        "{centre}"
+    );
+    let pose = robot.pose.position;
+    let to_bounds = common_distance(Point2::new(pose.x, pose.y));
+    assert!(to_bounds <= 1.0, "stopped {to_bounds} m from the TV");
+
+    // The gate: N_obs supporting observations before pursuit, and a fresh
+    // detection after arrival before STOP.
+    let snapshot = agent.snapshot();
+    let track = snapshot
+        .candidates
+        .iter()
+        .find(|t| t.object.0 == object)
+        .expect("confirmed candidate tracked");
+    assert!(
+        track.evidence.support >= 3,
+        "s_t = {}",
+        track.evidence.support
+    );
+    let decisions = agent.decisions();
+    let accepted = decisions
+        .iter()
+        .position(|d| d.step == DecisionStep::TargetAccepted)
+        .expect("NAV_TO_OBJECT decided");
+    let verified = decisions
+        .iter()
+        .position(|d| d.step == DecisionStep::TargetVerification)
+        .expect("verification after arrival");
+    let stopped = decisions
+        .iter()
+        .position(|d| d.step == DecisionStep::TargetConfirmed)
+        .expect("STOP decided");
+    assert!(accepted < verified && verified < stopped);
+    assert_eq!(stopped, decisions.len() - 1);
+
+    // Algorithm 1's ordering: once a candidate is accepted, the target
+    // pre-empts the context gate and exploration (no policy decision until
+    // STOP); a rate-limited decision always keeps an active mission; every
+    // policy decision happened with no accepted candidate.
+    assert!(
+        decisions[accepted..]
+            .iter()
+            .all(|d| d.step != DecisionStep::PolicyEvaluated),
+        "{:#?}",
+        &decisions[accepted..]
+    );
+    assert!(
+        decisions
+            .iter()
+            .filter(|d| d.step == DecisionStep::RateLimited)
+            .all(|d| d.mission.is_some())
+    );
+    assert!(
+        decisions
+            .iter()
+            .any(|d| d.step == DecisionStep::RateLimited)
+    );
+    assert!(
+        decisions
+            .iter()
+            .filter(|d| d.step == DecisionStep::PolicyEvaluated)
+            .all(|d| !d.reason.is_empty())
+    );
+
+    // The snapshot serialises with maps, frontiers, clusters and route.
+    let json = serde_json::to_value(&snapshot).unwrap();
+    assert!(json["occupancy"]["cells"].as_array().unwrap().len() > 1000);
+    assert!(json["objects"].as_array().unwrap().len() >= 3);
+    assert_eq!(json["last_decision"]["step"], "target_confirmed");
+}
+
+/// Horizontal distance from `p` to the TV's box.
+fn common_distance(p: Point2<f64>) -> f64 {
+    let dx = (10.2 - p.x).max(0.0).max(p.x - 10.8);
+    let dy = (3.7 - p.y).max(0.0).max(p.y - 3.89);
+    dx.hypot(dy)
+}
+
+#[test]
+fn a_single_sighting_is_not_pursued() {
+    // The TV is in sight of the start; it must be seen N_obs = 3 times
+    // before NAV_TO_OBJECT is dispatched.
+    let world = two_rooms();
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("tv").unwrap();
+    let robot = Robot::new(9.0, 2.5);
+    let observation = world.observation(robot.pose);
+    for t in 0..3u64 {
+        let report = agent.observe(&observation).unwrap();
+        assert_eq!(report.target_detections, 1);
+        let command = agent.step(std::time::Duration::from_secs(t)).unwrap();
+        let is_approach = matches!(&command, AgentCommand::Dispatch { mission, .. } if mission.kind.name() == "nav_to_object");
+        assert_eq!(is_approach, t == 2, "step {t}: {command:?}");
+    }
+}
+
+#[test]
+fn several_targets_in_a_row_keep_the_maps() {
+    let world = two_rooms();
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("sofa").unwrap();
+    let mut robot = Robot::new(3.5, 1.5);
+    let first = run(&mut agent, &world, &mut robot, 400);
+    assert!(first.stop.is_some(), "sofa found");
+    let objects_before = agent.snapshot().objects.len();
+
+    // The bed was seen on the way: the second search starts from the map.
+    agent.set_target("Go to the bed, please").unwrap();
+    assert_eq!(agent.snapshot().objects.len(), objects_before);
+    let second = run(&mut agent, &world, &mut robot, 400);
+    let (_, centre) = second.stop.expect("bed found");
+    assert!((centre.x - 1.5).abs() < 1.0 && (centre.y - 3.15).abs() < 1.0);
+    assert!(second.actions < first.actions + 200);
+}
+
+#[test]
+fn every_agent_variant_finds_the_target() {
+    let world = two_rooms();
+    for variant in sornav::Variant::ALL {
+        let Ok(config) = AgentConfig::for_variant(variant) else {
+            assert_eq!(variant, sornav::Variant::Oracle);
+            continue;
+        };
+        let mut agent = Agent::new(config).unwrap();
+        agent.set_target("television").unwrap();
+        let mut robot = Robot::new(3.5, 1.5);
+        let episode = run(&mut agent, &world, &mut robot, 500);
+        assert!(
+            episode.stop.is_some(),
+            "{} did not find the TV",
+            variant.name()
+        );
+        let pose = robot.pose.position;
+        assert!(
+            common_distance(Point2::new(pose.x, pose.y)) <= 1.0,
+            "{}",
+            variant.name()
+        );
+        if variant != sornav::Variant::Sornav {
+            assert!(
+                agent.decisions().iter().all(|d| d.action != "relocate"),
+                "{} relocated",
+                variant.name()
+            );
+        }
+    }
+}

@@ -1,0 +1,278 @@
+//! Bad input gives typed errors (never a panic, never partial
+//! integration); a depth/semantic frame with pinhole intrinsics works like
+//! a labelled cloud.
+
+mod common;
+
+use std::time::Duration;
+
+use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+use sornav::executor::{MissionId, MissionStatus, RobotPose};
+use sornav::semantic_map::{LabelId, LabeledPoint, PinholeCamera, optical_pose};
+use sornav::{
+    Agent, AgentCommand, AgentConfig, AgentError, CloudObservation, DepthObservation, Observation,
+    ObservationError, Sensor,
+};
+
+fn pose() -> RobotPose {
+    RobotPose::new(Point3::new(0.0, 0.0, 0.0), 0.0)
+}
+
+/// A 160 x 120 frame facing a wall 3 m ahead (+x) with a TV-labelled
+/// patch in its middle.
+fn depth_frame() -> DepthObservation {
+    let camera = PinholeCamera::from_hfov(160, 120, 79f64.to_radians());
+    let camera_pose = optical_pose(&Point3::new(0.0, 0.0, 0.88), 0.0, 0.0);
+    let n = 160 * 120;
+    let depth = vec![3.0f32; n];
+    let labels = (0..n)
+        .map(|i| {
+            let (u, v) = (i % 160, i / 160);
+            if (70..90).contains(&u) && (40..60).contains(&v) {
+                LabelId(15)
+            } else {
+                LabelId(1)
+            }
+        })
+        .collect();
+    DepthObservation {
+        camera,
+        camera_pose,
+        depth,
+        labels,
+    }
+}
+
+fn agent() -> Agent {
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("tv_monitor").unwrap();
+    agent
+}
+
+#[test]
+fn depth_frames_build_both_maps_and_feed_the_gate() {
+    let mut agent = agent();
+    let observation = Observation {
+        pose: pose(),
+        sensor: Sensor::Depth(depth_frame()),
+    };
+    let mut last = None;
+    for t in 0..3 {
+        let report = agent.observe(&observation).unwrap();
+        assert_eq!(report.points, 160 * 120);
+        assert_eq!(report.semantic_rejected, 0);
+        assert_eq!(report.target_detections, 1);
+        last = Some(agent.step(Duration::from_secs(t)).unwrap());
+    }
+    let tv = agent
+        .snapshot()
+        .objects
+        .into_iter()
+        .find(|o| o.label.as_deref() == Some("tv_monitor"))
+        .expect("TV cluster");
+    assert!(
+        (tv.centre.x - 3.0).abs() < 0.1 && tv.centre.y.abs() < 0.3,
+        "{}",
+        tv.centre
+    );
+    // Rows 40..60 lie above the optical centre: back-projection at 3 m.
+    let camera = depth_frame().camera;
+    let expected_z = 0.88 + 3.0 * (camera.cy - 49.5) / camera.fy;
+    assert!(
+        (tv.centre.z - expected_z).abs() < 0.05,
+        "{} vs {expected_z}",
+        tv.centre.z
+    );
+    match last {
+        Some(AgentCommand::Dispatch { mission, .. }) => {
+            assert_eq!(mission.kind.name(), "nav_to_object");
+            let to_tv = (mission.waypoint.xy() - tv.centre.xy()).norm();
+            assert!(to_tv < 1.0, "approach waypoint {} m from the TV", to_tv);
+        }
+        other => panic!("expected NAV_TO_OBJECT, got {other:?}"),
+    }
+}
+
+#[test]
+fn malformed_frames_are_typed_errors_and_change_nothing() {
+    let mut agent = agent();
+    let good = depth_frame();
+    let cases: Vec<(Observation, ObservationError)> = vec![
+        (
+            Observation {
+                pose: RobotPose::new(Point3::new(f64::NAN, 0.0, 0.0), 0.0),
+                sensor: Sensor::Depth(good.clone()),
+            },
+            ObservationError::NonFinitePose,
+        ),
+        (
+            Observation {
+                pose: RobotPose::new(Point3::origin(), f64::INFINITY),
+                sensor: Sensor::Depth(good.clone()),
+            },
+            ObservationError::NonFinitePose,
+        ),
+        (
+            Observation {
+                pose: pose(),
+                sensor: Sensor::Depth(DepthObservation {
+                    depth: vec![1.0; 10],
+                    ..good.clone()
+                }),
+            },
+            ObservationError::FrameSize {
+                width: 160,
+                height: 120,
+                depth: 10,
+                labels: 160 * 120,
+            },
+        ),
+        (
+            Observation {
+                pose: pose(),
+                sensor: Sensor::Depth(DepthObservation {
+                    camera_pose: Isometry3::from_parts(
+                        Translation3::new(f64::NAN, 0.0, 0.0),
+                        UnitQuaternion::identity(),
+                    ),
+                    ..good.clone()
+                }),
+            },
+            ObservationError::NonFiniteSensorPose,
+        ),
+        (
+            Observation {
+                pose: pose(),
+                sensor: Sensor::Cloud(CloudObservation {
+                    origin: Point3::new(0.0, f64::NEG_INFINITY, 0.0),
+                    points: vec![LabeledPoint::new(1.0, 0.0, 0.5, LabelId(1))],
+                }),
+            },
+            ObservationError::NonFiniteSensorPose,
+        ),
+        (
+            Observation {
+                pose: pose(),
+                sensor: Sensor::Cloud(CloudObservation {
+                    origin: Point3::origin(),
+                    points: vec![],
+                }),
+            },
+            ObservationError::Empty,
+        ),
+    ];
+    for (observation, expected) in cases {
+        match agent.observe(&observation) {
+            Err(AgentError::Observation(e)) => assert_eq!(e, expected),
+            other => panic!("expected {expected:?}, got {other:?}"),
+        }
+    }
+    let mut bad_intrinsics = good.clone();
+    bad_intrinsics.camera.fx = 0.0;
+    let result = agent.observe(&Observation {
+        pose: pose(),
+        sensor: Sensor::Depth(bad_intrinsics),
+    });
+    assert!(matches!(
+        result,
+        Err(AgentError::Observation(
+            ObservationError::InvalidIntrinsics(_)
+        ))
+    ));
+    // Coordinates beyond the grid's numeric range: the frontier map's
+    // typed error, and the semantic map is untouched.
+    let far = Observation {
+        pose: pose(),
+        sensor: Sensor::Cloud(CloudObservation {
+            origin: Point3::origin(),
+            points: vec![LabeledPoint::new(1.0e9, 0.0, 0.5, LabelId(1))],
+        }),
+    };
+    assert!(matches!(agent.observe(&far), Err(AgentError::Frontier(_))));
+    assert_eq!(agent.semantic_map().integrations(), 0);
+    assert_eq!(agent.stats().refused_observations, 8);
+    assert_eq!(agent.stats().observations, 0);
+    // Nothing was observed: the pose is still unknown.
+    assert!(matches!(
+        agent.step(Duration::ZERO),
+        Err(AgentError::NoObservation)
+    ));
+}
+
+#[test]
+fn invalid_points_inside_a_valid_frame_are_counted() {
+    let mut agent = agent();
+    let mut points: Vec<LabeledPoint> = (0..50)
+        .map(|i| LabeledPoint::new(2.0, -1.25 + 0.05 * i as f32, 0.5, LabelId(1)))
+        .collect();
+    points.push(LabeledPoint::new(f32::NAN, 0.0, 0.5, LabelId(1)));
+    points.push(LabeledPoint::new(1.0, f32::INFINITY, 0.5, LabelId(15)));
+    let report = agent
+        .observe(&Observation {
+            pose: pose(),
+            sensor: Sensor::Cloud(CloudObservation {
+                origin: Point3::new(0.0, 0.0, 0.88),
+                points,
+            }),
+        })
+        .unwrap();
+    assert_eq!(report.points, 52);
+    assert_eq!(report.semantic_rejected, 2);
+    assert_eq!(report.occupancy_rejected, 2);
+    assert_eq!(report.occupancy_points, 50);
+    assert_eq!(agent.stats().rejected_points, 4);
+}
+
+#[test]
+fn protocol_errors_are_typed() {
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    assert!(matches!(
+        agent.step(Duration::ZERO),
+        Err(AgentError::NoTarget)
+    ));
+    assert!(matches!(
+        agent.set_target("find the spaceship"),
+        Err(AgentError::UnknownTarget { .. })
+    ));
+    agent.set_target("couch").unwrap();
+    assert!(matches!(
+        agent.set_target("flux capacitor"),
+        Err(AgentError::UnknownTarget { .. })
+    ));
+    assert_eq!(agent.target().unwrap().category, "sofa");
+    assert!(matches!(
+        agent.step(Duration::ZERO),
+        Err(AgentError::NoObservation)
+    ));
+    let world = common::World {
+        blocks: vec![common::wall(3.0, -2.0, 3.2, 2.0)],
+    };
+    agent.observe(&world.observation(pose())).unwrap();
+    let command = agent.step(Duration::from_secs(10)).unwrap();
+    assert!(matches!(
+        agent.step(Duration::from_secs(9)),
+        Err(AgentError::ClockBackwards { .. })
+    ));
+    assert!(matches!(
+        agent.on_mission_outcome(MissionId(999), MissionStatus::Reached),
+        Err(AgentError::UnknownMission(MissionId(999)))
+    ));
+    // The platform's failure of an exploration mission excludes its
+    // frontier from later routes.
+    let AgentCommand::Dispatch { id, mission } = command else {
+        panic!("expected exploration, got {command:?}");
+    };
+    assert_eq!(mission.kind.name(), "explore");
+    agent
+        .on_mission_outcome(
+            id,
+            MissionStatus::Failed(sornav::executor::FailureReason::PathInvalidated),
+        )
+        .unwrap();
+    assert!(agent.active_mission().is_none());
+    assert_eq!(agent.snapshot().excluded_frontiers.len(), 1);
+    let next = agent.step(Duration::from_secs(11)).unwrap();
+    if let AgentCommand::Dispatch { mission: m2, .. } = next {
+        assert_ne!(m2.kind, mission.kind, "the failed frontier is not retried");
+    }
+}
