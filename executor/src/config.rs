@@ -1,5 +1,7 @@
 //! Executor parameters.
 
+use std::time::Duration;
+
 use serde::{Deserialize, Serialize};
 
 use crate::{ExecError, MissionKind};
@@ -120,9 +122,11 @@ impl ExecutorConfig {
         for kind in [&self.explore, &self.relocate, &self.nav_to_object] {
             kind.arrival.validate()?;
             if let Some(t) = kind.timeout_s
-                && !(t.is_finite() && t > 0.0)
+                && !(t.is_finite() && t > 0.0 && Duration::try_from_secs_f64(t).is_ok())
             {
-                return Err(ExecError::InvalidConfig("timeout must be finite and > 0"));
+                return Err(ExecError::InvalidConfig(
+                    "timeout must be finite, > 0 and representable as a Duration",
+                ));
             }
         }
         if !(self.stuck_progress_m.is_finite() && self.stuck_progress_m >= 0.0) {
@@ -130,9 +134,12 @@ impl ExecutorConfig {
                 "stuck progress must be finite and >= 0",
             ));
         }
-        if !(self.stuck_window_s.is_finite() && self.stuck_window_s > 0.0) {
+        if !(self.stuck_window_s.is_finite()
+            && self.stuck_window_s > 0.0
+            && Duration::try_from_secs_f64(self.stuck_window_s).is_ok())
+        {
             return Err(ExecError::InvalidConfig(
-                "stuck window must be finite and > 0",
+                "stuck window must be finite, > 0 and representable as a Duration",
             ));
         }
         Ok(())

@@ -360,6 +360,23 @@ fn bad_inputs_are_errors() {
     bad = ExecutorConfig::default();
     bad.relocate.arrival.radius_m = f64::NAN;
     assert!(bad.validate().is_err());
+    // Finite but beyond what a `Duration` can hold: an error, not a panic
+    // in `Executor::new` or `tick`.
+    bad = ExecutorConfig::default();
+    bad.explore.timeout_s = Some(1e30);
+    assert!(bad.validate().is_err());
+    bad = ExecutorConfig {
+        stuck_window_s: 1e30,
+        ..ExecutorConfig::default()
+    };
+    assert!(
+        Executor::new(
+            bad,
+            Recorder::default(),
+            SimClock::new(Duration::from_secs(1))
+        )
+        .is_err()
+    );
 }
 
 #[test]

@@ -133,6 +133,7 @@ fn main() -> Result<(), Box<dyn Error>> {
                 .get(&t)
                 .map_or(0, |m| m.values().sum::<usize>()) as f64
                 / n_scenes,
+            scene_presence: type_scene_count.get(&t).map_or(0, |m| m.len()) as f64 / n_scenes,
             objects: cats
                 .into_iter()
                 .map(|(category, (present, total))| CategoryStats {

@@ -408,6 +408,95 @@ mod tests {
         }
     }
 
+    /// Polygon with vertices at sorted angles and the given radii around
+    /// `c`; convex when all radii are equal.
+    fn star(c: (f64, f64), angles: &[f64], radii: &[f64]) -> Vec<Point2<f64>> {
+        let mut a: Vec<f64> = angles.to_vec();
+        a.sort_by(f64::total_cmp);
+        a.dedup_by(|x, y| (*x - *y).abs() < 1e-3);
+        a.iter()
+            .zip(radii.iter().cycle())
+            .map(|(t, r)| Point2::new(c.0 + r * t.cos(), c.1 + r * t.sin()))
+            .collect()
+    }
+
+    /// Angles (k + jitter_k) 2 pi / n: consecutive gaps stay below pi for
+    /// n >= 4, so the polygon is star-shaped around its centre, hence simple.
+    fn sector_angles(jitter: &[f64]) -> Vec<f64> {
+        let n = jitter.len() as f64;
+        jitter
+            .iter()
+            .enumerate()
+            .map(|(k, j)| (k as f64 + j) * std::f64::consts::TAU / n)
+            .collect()
+    }
+
+    /// Grid points of [-3, 3]^2 (step 0.07, offset so they avoid round numbers).
+    fn grid() -> impl Iterator<Item = Point2<f64>> {
+        (0..86).flat_map(|i| {
+            (0..86).map(move |j| {
+                Point2::new(
+                    -3.0 + 0.0123 + 0.07 * i as f64,
+                    -3.0 + 0.0371 + 0.07 * j as f64,
+                )
+            })
+        })
+    }
+
+    proptest::proptest! {
+        /// Ear clipping of random simple (star-shaped) polygons of either
+        /// orientation: counter-clockwise triangles whose areas sum to the
+        /// polygon's, and (differential test against the even-odd rule) a point
+        /// is in the polygon iff it is in one of the triangles.
+        #[test]
+        fn triangulation_tiles_random_simple_polygons(
+            jitter in proptest::collection::vec(0.0f64..1.0, 4..24),
+            radii in proptest::collection::vec(0.3f64..2.5, 1..24),
+            reverse in proptest::bool::ANY,
+        ) {
+            let mut poly = star((0.1, -0.2), &sector_angles(&jitter), &radii);
+            proptest::prop_assume!(poly.len() >= 3 && polygon_area(&poly) > 1e-3);
+            if reverse {
+                poly.reverse();
+            }
+            let tris = triangulate(&poly);
+            proptest::prop_assert!(tris.len() <= poly.len() - 2);
+            for t in &tris {
+                proptest::prop_assert!(polygon_area(&[poly[t[0]], poly[t[1]], poly[t[2]]]) > 0.0);
+            }
+            let a = polygon_area(&poly).abs();
+            proptest::prop_assert!((area_of(&poly, &tris) - a).abs() < 1e-9 * a.max(1.0));
+            for p in grid() {
+                let inside = point_in_polygon(&p, &poly);
+                let covered = tris.iter().any(|t| point_in_polygon(&p, &[poly[t[0]], poly[t[1]], poly[t[2]]]));
+                proptest::prop_assert_eq!(inside, covered, "point {}", p);
+            }
+        }
+
+        /// Subtracting a random convex hole from a random convex polygon:
+        /// pieces are disjoint and cover exactly the points of the polygon
+        /// outside the hole (differential test against point membership).
+        #[test]
+        fn subtract_convex_matches_point_membership(
+            a1 in proptest::collection::vec(0.0f64..std::f64::consts::TAU, 3..10),
+            a2 in proptest::collection::vec(0.0f64..std::f64::consts::TAU, 3..10),
+            r1 in 1.0f64..2.8, r2 in 0.2f64..2.0,
+            cx in -1.5f64..1.5, cy in -1.5f64..1.5,
+        ) {
+            let poly = star((0.0, 0.0), &a1, &[r1]);
+            let hole = star((cx, cy), &a2, &[r2]);
+            proptest::prop_assume!(poly.len() >= 3 && hole.len() >= 3);
+            proptest::prop_assume!(polygon_area(&poly) > 1e-3 && polygon_area(&hole) > 1e-3);
+            let pieces = subtract_convex(&poly, &hole);
+            for p in grid() {
+                let want = point_in_polygon(&p, &poly) && !point_in_polygon(&p, &hole);
+                let n = pieces.iter().filter(|q| point_in_polygon(&p, q)).count();
+                proptest::prop_assert!(n <= 1, "pieces overlap at {}", p);
+                proptest::prop_assert_eq!(want, n == 1, "point {}", p);
+            }
+        }
+    }
+
     #[test]
     fn subtract_convex_tiles_the_difference() {
         let sq = |x0: f64, y0: f64, x1: f64, y1: f64| {

@@ -176,7 +176,13 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
                         Point3::new(v.x, v.y, v.z)
                     })
                     .collect();
-                if pos.iter().any(|p| !p.coords.iter().all(|c| c.is_finite())) {
+                // finite after the node transforms, and within f32 (the
+                // scene's vertex type)
+                if pos.iter().any(|p| {
+                    !p.coords
+                        .iter()
+                        .all(|&c| c.is_finite() && (c as f32).is_finite())
+                }) {
                     return Err(err(node_name, "non-finite vertex position"));
                 }
                 let idx: Vec<u32> = match reader.read_indices() {

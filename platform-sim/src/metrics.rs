@@ -127,8 +127,14 @@ pub struct EpisodeResult {
     pub cross_floor: bool,
     /// How the episode ended.
     pub outcome: Outcome,
-    /// Wall-clock time of the episode (s).
+    /// Wall-clock time of the whole [`crate::run::run_episode`] call (s),
+    /// setup and scoring included.
     pub wall_s: f64,
+    /// Wall-clock time counted against the budget (s): from the first
+    /// observation to the end of the last action (see
+    /// [`crate::run::run_episode`]).
+    #[serde(default)]
+    pub timed_s: f64,
     /// Median time of one step (render + policy + bookkeeping), ms.
     pub step_ms_p50: f64,
 }

@@ -27,6 +27,13 @@
 //!    than the radius to a border, like Recast's `rcErodeWalkableArea`.
 //! 6. **Islands** (connected components) smaller than `min_region_area` are
 //!    dropped.
+//! 7. **Floor**: a span is floor when its surface is the top of a floor or
+//!    staircase instance (or of an object at most [`THIN_COVER`] thick on
+//!    one, a carpet); an island is on the floor when it holds a floor span.
+//!    Islands on furniture (bed tops, large tables) and object surfaces
+//!    reached by a low step (a hearth) stay walkable for `is_navigable`
+//!    queries but are never used to place agents
+//!    ([`NavMesh::is_floor_span`], [`NavMesh::is_floor_region`]).
 //!
 //! Reference: M. Mononen, *Recast Navigation* (2009), whose parameters Habitat
 //! uses for its navmesh (step 0.2 m, slope 45 deg).
@@ -37,7 +44,7 @@ use std::path::Path;
 use nalgebra::{Point2, Point3};
 use serde::{Deserialize, Serialize};
 
-use crate::scene::Scene;
+use crate::scene::{InstanceKind, Scene};
 use crate::{NavError, SceneError};
 
 /// Parameters of the walkable height field (defaults: Habitat's ObjectNav agent).
@@ -121,6 +128,10 @@ impl NavMeshConfig {
 /// footprint at 0.05 m; larger scenes need a coarser `cell_size`.
 pub const MAX_COLUMNS: usize = 25_000_000;
 
+/// Objects at most this thick (m) on a floor (carpets, thresholds, lamp
+/// bases) still count as floor surface for [`NavMesh::is_floor_span`].
+pub const THIN_COVER: f32 = 0.05;
+
 /// Index of a walkable span in a [`NavMesh`].
 pub type SpanId = u32;
 const NONE: u32 = u32::MAX;
@@ -153,6 +164,14 @@ pub struct NavMesh {
     spans: Vec<Span>,
     span_col: Vec<u32>,
     region_area: Vec<f64>,
+    /// Per span: its walking surface is the top of a floor or staircase, or
+    /// of an object at most [`THIN_COVER`] above one.
+    #[serde(default)]
+    span_ground: Vec<bool>,
+    /// Per region: whether it contains a floor or staircase surface
+    /// (see [`NavMesh::is_floor_region`]).
+    #[serde(default)]
+    region_floor: Vec<bool>,
 }
 
 #[derive(Clone, Copy)]
@@ -164,6 +183,9 @@ struct Solid {
     /// The top surface belongs to a downward-facing triangle (underside of a
     /// closed object resting on it).
     down_top: bool,
+    /// Height of the highest floor or staircase surface in the solid
+    /// (`-inf` without one).
+    ground_z: f32,
 }
 
 /// Clips a 3-D polygon against `coord[axis] <= c` (keep = true) or `>= c`.
@@ -215,12 +237,23 @@ impl NavMesh {
         let height = (((b.max.y - origin[1]) / cs).ceil() as usize + 2).max(1);
         let cos_slope = config.max_slope_deg.to_radians().cos();
         let verts = scene.vertices();
+        let ground_instance: Vec<bool> = scene
+            .instances()
+            .iter()
+            .map(|i| matches!(i.kind, InstanceKind::Floor | InstanceKind::Stairs))
+            .collect();
+        let tri_inst = scene.triangle_instances();
 
         // 1. rasterise
         let mut solids: Vec<Solid> = Vec::new();
         let mut a = Vec::with_capacity(8);
         let mut bb = Vec::with_capacity(8);
-        for t in scene.triangles() {
+        for (ti, t) in scene.triangles().iter().enumerate() {
+            let ground = tri_inst
+                .get(ti)
+                .and_then(|&i| ground_instance.get(i as usize))
+                .copied()
+                .unwrap_or(false);
             let p: [[f64; 3]; 3] = t.map(|i| verts[i as usize].map(f64::from));
             let e1 = [p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]];
             let e2 = [p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]];
@@ -270,6 +303,11 @@ impl NavMesh {
                         zmax: zmax as f32,
                         walkable,
                         down_top: down,
+                        ground_z: if ground {
+                            zmax as f32
+                        } else {
+                            f32::NEG_INFINITY
+                        },
                     });
                 }
             }
@@ -294,6 +332,7 @@ impl NavMesh {
                 } else if (s.zmax - cur.zmax).abs() <= 1e-3 {
                     cur.down_top |= s.down_top;
                 }
+                cur.ground_z = cur.ground_z.max(s.ground_z);
                 cur.zmax = cur.zmax.max(s.zmax);
                 continue;
             }
@@ -313,6 +352,7 @@ impl NavMesh {
         let mut col_start = vec![0u32; ncols + 1];
         let mut spans: Vec<Span> = Vec::new();
         let mut span_col: Vec<u32> = Vec::new();
+        let mut span_ground: Vec<bool> = Vec::new();
         let ah = config.agent_height as f32;
         let mut i = 0;
         for (c, start) in col_start.iter_mut().enumerate().take(ncols) {
@@ -332,6 +372,7 @@ impl NavMesh {
                         region: 0,
                     });
                     span_col.push(c as u32);
+                    span_ground.push(s.zmax - s.ground_z <= THIN_COVER);
                 }
                 i += 1;
             }
@@ -346,10 +387,16 @@ impl NavMesh {
             spans,
             span_col,
             region_area: Vec::new(),
+            span_ground,
+            region_floor: Vec::new(),
         };
         nm.connect();
         nm.erode();
         nm.drop_small_islands();
+        // scenes without any floor or staircase instance (unlabelled meshes):
+        // every region counts as floor
+        let labelled = ground_instance.iter().any(|&g| g);
+        nm.label_floor_regions(labelled);
         Ok(nm)
     }
 
@@ -482,8 +529,10 @@ impl NavMesh {
         }
         let mut spans = Vec::with_capacity(next as usize);
         let mut span_col = Vec::with_capacity(next as usize);
+        let mut span_ground = Vec::with_capacity(next as usize);
         for (s, sp) in self.spans.iter().enumerate() {
             if keep[s] {
+                span_ground.push(self.span_ground.get(s).copied().unwrap_or(false));
                 let mut sp = *sp;
                 for n in &mut sp.neighbours {
                     if *n != NONE {
@@ -503,6 +552,7 @@ impl NavMesh {
         }
         self.spans = spans;
         self.span_col = span_col;
+        self.span_ground = span_ground;
         self.col_start = col_start;
     }
 
@@ -527,6 +577,22 @@ impl NavMesh {
             region_area[l as usize] += cell_area;
         }
         self.region_area = region_area;
+    }
+
+    /// Step 7, floor regions: a region is on the floor when one of its spans
+    /// is the top of a floor or staircase instance (all regions, and all
+    /// spans, when `labelled` is false).
+    fn label_floor_regions(&mut self, labelled: bool) {
+        if !labelled {
+            self.span_ground.iter_mut().for_each(|g| *g = true);
+        }
+        let mut floor = vec![!labelled; self.region_area.len()];
+        for (sp, &g) in self.spans.iter().zip(&self.span_ground) {
+            if g {
+                floor[sp.region as usize] = true;
+            }
+        }
+        self.region_floor = floor;
     }
 
     fn label_components(&self) -> (Vec<u32>, usize) {
@@ -579,6 +645,41 @@ impl NavMesh {
     /// Area (m^2) of each island, indexed by [`Span::region`].
     pub fn region_areas(&self) -> &[f64] {
         &self.region_area
+    }
+    /// Whether island `region` lies on the building's floor: it contains
+    /// the top of a floor or staircase instance. Islands on top of furniture
+    /// (a bed or a large table top can exceed `min_region_area`) are not.
+    /// In scenes without any floor or staircase instance every island counts
+    /// as floor. Agent poses (episode starts, view points) are sampled on
+    /// floor islands only.
+    pub fn is_floor_region(&self, region: u32) -> bool {
+        // height fields deserialised from before this flag existed: all
+        self.region_floor
+            .get(region as usize)
+            .copied()
+            .unwrap_or(self.region_floor.is_empty())
+    }
+    /// Whether span `s` is floor: its walking surface is the top of a floor
+    /// or staircase instance, or of an object at most [`THIN_COVER`] thick on
+    /// one (a carpet), on a floor island ([`NavMesh::is_floor_region`]).
+    /// Spans on furniture connected to the floor by a low step (a hearth, a
+    /// shower tray) are walkable but not floor. In scenes without any floor
+    /// or staircase instance every span counts as floor.
+    pub fn is_floor_span(&self, s: SpanId) -> bool {
+        let Some(sp) = self.spans.get(s as usize) else {
+            return false;
+        };
+        let own = self.span_ground.get(s as usize).copied().unwrap_or(true);
+        own && self.is_floor_region(sp.region)
+    }
+    /// Walkable area of the floor islands in m^2.
+    pub fn floor_area(&self) -> f64 {
+        self.region_area
+            .iter()
+            .enumerate()
+            .filter(|&(r, _)| self.is_floor_region(r as u32))
+            .map(|(_, a)| a)
+            .sum()
     }
     /// The island with the largest area.
     pub fn largest_region(&self) -> Option<u32> {

@@ -114,7 +114,7 @@ impl Policy for RandomWalk {
 pub struct Oracle {
     /// Geodesic distance at which to STOP (0.1 m minus a margin: 0.09).
     pub stop_distance: f64,
-    /// Depth of the fallback search (12 actions).
+    /// Depth of the fallback search (16 actions).
     pub search_depth: usize,
     field: Option<GeodesicField>,
     nav: Option<std::sync::Arc<crate::NavMesh>>,
@@ -125,7 +125,7 @@ impl Default for Oracle {
     fn default() -> Self {
         Oracle {
             stop_distance: 0.09,
-            search_depth: 12,
+            search_depth: 16,
             field: None,
             nav: None,
             plan: VecDeque::new(),

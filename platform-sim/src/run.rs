@@ -59,7 +59,9 @@ pub struct SimConfig {
 pub struct RunConfig {
     /// Action budget (500).
     pub max_actions: usize,
-    /// Wall-clock budget in seconds (120, as in the paper); counted as timeout.
+    /// Wall-clock budget in seconds (120, as in the paper), from the first
+    /// observation to the last action, setup excluded (see [`run_episode`]);
+    /// running out ends the episode as a timeout.
     pub wall_clock_s: f64,
     /// Success radius around goal view points, geodesic metres (0.1).
     pub success_distance: f64,
@@ -260,6 +262,19 @@ impl Observation<'_> {
 /// Plays one episode: spawn, then observe -> act until STOP, the action budget
 /// or the wall-clock budget; then score.
 ///
+/// # Wall-clock budget
+/// [`RunConfig::wall_clock_s`] counts from the first observation (just
+/// before the first frame is rendered) to the end of the last action:
+/// rendering, the policy's [`Policy::act`] and the agent's motion. Setup is
+/// not counted: spawning the agent, the goal's geodesic field and
+/// [`Policy::reset`]. The budget is checked before every observation but the
+/// first and right after every `act`; an action returned after the budget ran out is
+/// discarded (neither executed nor counted, so a late STOP is no success)
+/// and the episode ends as a timeout. A policy blocked inside `act` is not
+/// interrupted: it times out when `act` returns.
+/// [`EpisodeResult::timed_s`] reports the counted time,
+/// [`EpisodeResult::wall_s`] the whole call.
+///
 /// # Errors
 /// [`SimError`] when the start is not navigable, no view point lies on the
 /// walkable surface or the run configuration is invalid.
@@ -303,7 +318,15 @@ pub fn run_episode(
     };
     let mut step_ms = Vec::new();
     let seed_base = config.noise_seed ^ hash_str(&episode.episode_id);
+    // the budget counts from the first observation on (setup excluded)
+    let clock = Instant::now();
+    let spent = |clock: &Instant| clock.elapsed().as_secs_f64() > config.wall_clock_s;
     loop {
+        // (before the first observation nothing has been counted yet)
+        if actions > 0 && spent(&clock) {
+            term.timeout = true;
+            break;
+        }
         let ts = Instant::now();
         let frame =
             needs_frames.then(|| sim.observe_frame(&agent, seed_base.wrapping_add(actions as u64)));
@@ -320,6 +343,12 @@ pub fn run_episode(
             scene: sim.scene(),
         };
         let action = policy.act(&obs);
+        if spent(&clock) {
+            // the action came after the budget ran out: discarded
+            step_ms.push(ts.elapsed().as_secs_f64() * 1e3);
+            term.timeout = true;
+            break;
+        }
         actions += 1;
         if action == Action::Stop {
             term.stopped = true;
@@ -336,11 +365,8 @@ pub fn run_episode(
             term.step_limit = true;
             break;
         }
-        if t0.elapsed().as_secs_f64() > config.wall_clock_s {
-            term.timeout = true;
-            break;
-        }
     }
+    let timed_s = clock.elapsed().as_secs_f64();
     let end = agent.position();
     let dtg = field.distance(nav, &end).ok().filter(|d| d.is_finite());
     let success = term.stopped && dtg.is_some_and(|d| d <= config.success_distance);
@@ -365,6 +391,7 @@ pub fn run_episode(
         cross_floor,
         outcome: metrics::classify(term, success, near_object, cross_floor),
         wall_s: t0.elapsed().as_secs_f64(),
+        timed_s,
         step_ms_p50: step_ms.get(step_ms.len() / 2).copied().unwrap_or(0.0),
     })
 }

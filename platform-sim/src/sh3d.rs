@@ -13,9 +13,11 @@
 //!   elevation range) through the walls they overlap. Doors, i.e. openings
 //!   starting within 0.3 m of the floor and at least 1.8 m high, are left open
 //!   (no geometry, passable); windows keep their model.
-//! * **Rooms** become floor slabs (`floorVisible`) and ceilings
-//!   (`ceilingVisible`); staircases (`staircaseCutOutShape`) cut their footprint
-//!   out of the floors and ceilings they pass through, so levels connect.
+//! * **Rooms** (with at least three points; others are skipped) become floor
+//!   slabs (`floorVisible`) and ceilings (`ceilingVisible`); staircases
+//!   (pieces with a `staircaseCutOutShape`) cut their rectangular footprint
+//!   (not the SVG cut-out shape itself) out of the floors and ceilings they
+//!   pass through, so levels connect.
 //! * **Furniture** is placed from its OBJ model by Sweet Home 3D's rule: apply
 //!   `modelRotation`, centre the model's bounds at the origin, scale to
 //!   width x height x depth, mirror (`modelMirrored`), rotate by `angle`,
@@ -271,6 +273,10 @@ fn parse_xml(xml: &str) -> Result<XmlHome, SceneError> {
             }
             "point" => {
                 if let Some(r) = current_room.as_mut() {
+                    let a = Attrs {
+                        label: format!("point of room '{}'", r.name),
+                        m: &m,
+                    };
                     r.points.push(Point2::new(a.f("x")?, a.f("y")?));
                 }
             }
@@ -379,8 +385,9 @@ type Resolver<'a> = dyn FnMut(&str) -> Option<Result<String, SceneError>> + 'a;
 /// (paths relative to [`RESOURCE_PREFIX`]).
 ///
 /// # Errors
-/// [`SceneError`] naming the offending element for malformed XML, missing
-/// attributes, non-finite numbers or missing models.
+/// [`SceneError`] naming the offending element for malformed XML, missing or
+/// unparsable attributes, references to unknown levels, non-finite numbers or
+/// missing models.
 pub fn load_home_xml(
     path: &Path,
     models_dir: &Path,
@@ -505,14 +512,17 @@ fn build_home(
             visible: true,
         });
     }
-    let level_of = |id: &Option<String>| -> Result<usize, SceneError> {
-        match id {
-            None => Ok(0),
-            Some(i) => levels
-                .iter()
-                .position(|l| &l.id == i)
-                .ok_or_else(|| SceneError::Invalid(format!("unknown level `{i}`"))),
-        }
+    // `element` names the referring element in the error.
+    let level_of = |id: &Option<String>, element: &dyn Fn() -> String| match id {
+        None => Ok(0),
+        Some(i) => levels
+            .iter()
+            .position(|l| &l.id == i)
+            .ok_or_else(|| SceneError::Attribute {
+                element: element(),
+                attribute: "level".into(),
+                message: format!("unknown level `{i}`"),
+            }),
     };
     let built = |l: usize| options.include_hidden_levels || levels[l].visible;
     if home.walls.is_empty() && home.rooms.is_empty() && home.pieces.is_empty() {
@@ -525,7 +535,7 @@ fn build_home(
     // staircase footprints with their vertical range
     let mut stairs: Vec<(Vec<Point2<f64>>, f64, f64)> = Vec::new();
     for p in &home.pieces {
-        let l = level_of(&p.level)?;
+        let l = level_of(&p.level, &|| p.element.clone())?;
         if p.staircase && p.visible && built(l) {
             let z0 = levels[l].level.elevation + p.elevation / 100.0;
             stairs.push((footprint(p), z0, z0 + p.height / 100.0));
@@ -535,7 +545,7 @@ fn build_home(
     // rooms: floors and ceilings
     let mut rooms = Vec::new();
     for r in &home.rooms {
-        let l = level_of(&r.level)?;
+        let l = level_of(&r.level, &|| format!("room '{}'", r.name))?;
         let lv = &levels[l].level;
         let poly: Vec<Point2<f64>> = r.points.iter().map(|p| to_scene(*p)).collect();
         if poly.len() < 3 {
@@ -601,10 +611,10 @@ fn build_home(
         .pieces
         .iter()
         .filter(|p| p.door_or_window && p.visible)
-        .map(|p| Ok((level_of(&p.level)?, p)))
+        .map(|p| Ok((level_of(&p.level, &|| p.element.clone())?, p)))
         .collect::<Result<_, SceneError>>()?;
     for w in &home.walls {
-        let l = level_of(&w.level)?;
+        let l = level_of(&w.level, &|| format!("wall '{}'", w.id))?;
         if !built(l) {
             continue;
         }
@@ -696,7 +706,7 @@ fn build_home(
     // furniture, doors, windows
     let mut cache: HashMap<String, Arc<ObjMesh>> = HashMap::new();
     for p in &home.pieces {
-        let l = level_of(&p.level)?;
+        let l = level_of(&p.level, &|| p.element.clone())?;
         if !p.visible || !built(l) {
             continue;
         }

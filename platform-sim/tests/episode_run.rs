@@ -94,6 +94,36 @@ fn check_constraints(sim: &Simulator, episodes: &[Episode], config: &GeneratorCo
                 );
             }
         }
+        // The recorded closest goal is the one with the shortest geodesic
+        // distance, and the cross-floor flag compares the start's height with
+        // that goal's view points.
+        let per_goal: Vec<(u64, f64)> = e
+            .goals
+            .iter()
+            .map(|g| {
+                let vps: Vec<Point3<f64>> = g.view_points.iter().map(|v| v.position).collect();
+                let f = nav.geodesic_field(&vps).unwrap();
+                (g.object_id, f.distance(nav, &e.start_position).unwrap())
+            })
+            .collect();
+        let best = per_goal.iter().map(|g| g.1).fold(f64::INFINITY, f64::min);
+        let recorded = per_goal
+            .iter()
+            .find(|g| Some(g.0) == e.closest_goal_object_id)
+            .unwrap();
+        assert!((recorded.1 - best).abs() < 1e-9, "episode {}", e.episode_id);
+        assert!((best - d).abs() < 1e-9);
+        let goal = e
+            .goals
+            .iter()
+            .find(|g| Some(g.object_id) == e.closest_goal_object_id)
+            .unwrap();
+        let dz = goal
+            .view_points
+            .iter()
+            .map(|v| (v.position.z - e.start_position.z).abs())
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(e.cross_floor, Some(dz > 0.5), "episode {}", e.episode_id);
         // No episode starts at a view point.
         assert!(
             e.view_point_positions()
@@ -213,6 +243,66 @@ fn shared_homes_oracle() {
     }
 }
 
+/// The two-storey homes with the 0.22 m step their 21.8 cm stair risers need
+/// (see `scene_sh3d::multi_level_homes_connect_floors`): episodes cross
+/// floors, and the oracle climbs the real staircases (straight and curved)
+/// by moving forward.
+#[test]
+fn shared_homes_across_floors_oracle() {
+    let Some(dir) = sornav_test_support::shared_data("sh3d-homes") else {
+        return;
+    };
+    let config = GeneratorConfig {
+        episodes_per_category: 3,
+        seed: 11,
+        ..GeneratorConfig::default()
+    };
+    let mut cross = 0;
+    for home in ["2BedroomHouseWithBasement", "3BedroomHouseWithAttic"] {
+        let scene = Scene::from_home_xml(
+            &dir.join("homes").join(format!("{home}.xml")),
+            &dir.join("models"),
+        )
+        .unwrap();
+        let sim = Simulator::new(
+            scene,
+            SimConfig {
+                camera: CameraConfig {
+                    width: 160,
+                    height: 120,
+                    ..CameraConfig::default()
+                },
+                nav: sornav_platform_sim::NavMeshConfig {
+                    max_step: 0.22,
+                    ..Default::default()
+                },
+                ..SimConfig::default()
+            },
+        )
+        .unwrap();
+        let episodes = generate_episodes(&sim, &config).unwrap();
+        check_constraints(&sim, &episodes, &config);
+        // Episodes whose start and closest goal are a storey (2.62 m) apart.
+        cross += episodes
+            .iter()
+            .filter(|e| {
+                let goal = e
+                    .goals
+                    .iter()
+                    .find(|g| Some(g.object_id) == e.closest_goal_object_id)
+                    .unwrap();
+                e.cross_floor == Some(true)
+                    && goal
+                        .view_points
+                        .iter()
+                        .all(|v| (v.position.z - e.start_position.z).abs() > 2.0)
+            })
+            .count();
+        oracle_and_stop(&sim, &episodes);
+    }
+    assert!(cross >= 3, "only {cross} episodes across storeys");
+}
+
 #[test]
 fn random_walk_hits_the_step_limit_and_taxonomy_holds() {
     let scene = Scene::procedural(
@@ -272,7 +362,9 @@ fn random_walk_hits_the_step_limit_and_taxonomy_holds() {
         },
     )
     .unwrap();
-    assert_eq!(r.actions, 1);
+    // the first action came after the budget ran out: discarded (see
+    // `run_episode`'s wall-clock rules)
+    assert_eq!(r.actions, 0);
     assert!(matches!(r.outcome, Outcome::Timeout | Outcome::CrossFloor));
 }
 
@@ -285,4 +377,81 @@ impl Policy for RenderingWalk {
         assert_eq!(f.depth.len(), 160 * 120);
         self.0.act(obs)
     }
+}
+
+/// habitat-lab's filter against trivial episodes: below a geodesic/euclidean
+/// ratio of 1.1 an episode is kept with probability 20 (r - 0.98)^2. As in
+/// habitat-lab, the Euclidean distance goes to the closest goal's centre and
+/// the geodesic one to its nearest view point, so most ratios are below 1 and
+/// the filter mostly removes ratios near 1 (0.9-1.05 keep at most 13 %).
+#[test]
+fn ratio_filter_thins_near_straight_line_episodes() {
+    let mut near_one = [0usize; 2];
+    let mut total = [0usize; 2];
+    for seed in [1u64, 2] {
+        let scene = Scene::procedural(
+            seed,
+            &ProceduralConfig {
+                floors: Some(1),
+                ..ProceduralConfig::default()
+            },
+        )
+        .unwrap();
+        let sim = simulator(scene);
+        for (k, ratio) in [0.0, 1.1].into_iter().enumerate() {
+            let config = GeneratorConfig {
+                episodes_per_category: 20,
+                geodesic_to_euclid_ratio: ratio,
+                seed: 7,
+                ..GeneratorConfig::default()
+            };
+            let episodes = generate_episodes(&sim, &config).unwrap();
+            total[k] += episodes.len();
+            near_one[k] += episodes
+                .iter()
+                .filter(|e| {
+                    let r = e.geodesic_distance.unwrap() / e.euclidean_distance.unwrap();
+                    (0.9..1.05).contains(&r)
+                })
+                .count();
+        }
+    }
+    assert!(total[1] >= 150 && total[0] >= 150, "{total:?}");
+    assert!(near_one[0] >= 20, "unfiltered: {near_one:?}");
+    assert!(near_one[1] * 3 < near_one[0], "filtered: {near_one:?}");
+}
+
+/// Habitat's protocol defaults, and the 500-action limit of a policy that
+/// never stops.
+#[test]
+fn default_rules_are_habitats() {
+    let c = RunConfig::default();
+    assert_eq!(c.max_actions, 500);
+    assert_eq!(c.wall_clock_s, 120.0);
+    assert_eq!(c.success_distance, 0.1);
+    assert_eq!(c.object_distance, 1.0);
+    let scene = Scene::procedural(
+        4,
+        &ProceduralConfig {
+            floors: Some(1),
+            ..ProceduralConfig::default()
+        },
+    )
+    .unwrap();
+    let sim = simulator(scene);
+    let episodes = generate_episodes(
+        &sim,
+        &GeneratorConfig {
+            episodes_per_category: 1,
+            ..GeneratorConfig::default()
+        },
+    )
+    .unwrap();
+    let r = run_episode(&sim, &episodes[0], &mut RandomWalk::new(3), &c).unwrap();
+    assert_eq!(r.actions, 500);
+    assert!(matches!(
+        r.outcome,
+        Outcome::StepLimit | Outcome::CrossFloor
+    ));
+    assert!(!r.success && !r.success_1m);
 }

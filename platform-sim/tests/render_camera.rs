@@ -334,6 +334,43 @@ fn noise_models_are_off_by_default_and_deterministic() {
     assert!(!m.instance.contains(&OBJ));
 }
 
+/// Depth noise follows its model: zero-mean Gaussian with standard deviation
+/// `depth_sigma * z^2`, applied to valid returns only.
+#[test]
+fn depth_noise_has_the_configured_spread() {
+    let base = CameraConfig {
+        width: 120,
+        height: 90,
+        ..CameraConfig::default()
+    };
+    let pose = CameraPose {
+        position: Point3::new(1.0, 2.0, 0.88),
+        yaw: 0.2,
+        pitch: -0.3,
+    };
+    let clean = Camera::new(room(2), base.clone()).unwrap().render(&pose, 0);
+    let mut cfg = base;
+    cfg.noise.depth_sigma = 0.01;
+    let noisy = Camera::new(room(2), cfg).unwrap().render(&pose, 3);
+    let mut z = Vec::new();
+    for (c, n) in clean.depth.iter().zip(&noisy.depth) {
+        if *c == 0.0 {
+            assert_eq!(*n, 0.0, "no noise where there is no return");
+            continue;
+        }
+        let c = f64::from(*c);
+        z.push((f64::from(*n) - c) / (0.01 * c * c));
+    }
+    assert!(z.len() > 5000, "{} valid pixels", z.len());
+    let mean = z.iter().sum::<f64>() / z.len() as f64;
+    let sd = (z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / z.len() as f64).sqrt();
+    // 4-sigma bounds for the mean and the spread of ~9,000 standard normals
+    assert!(mean.abs() < 0.05, "mean {mean}");
+    assert!((sd - 1.0).abs() < 0.04, "sd {sd}");
+    let beyond_2 = z.iter().filter(|v| v.abs() > 2.0).count() as f64 / z.len() as f64;
+    assert!((beyond_2 - 0.0455).abs() < 0.012, "tail {beyond_2}");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
     /// No holes: from anywhere inside a closed, finely tessellated

@@ -68,10 +68,58 @@ fn nan_coordinates_name_the_element() {
         }
         other => panic!("{other:?}"),
     }
-    let bad = WALLS
-        .replace("thickness='10'/>\n", "")
-        .replace("xStart='400' yStart='0'", "xStart='abc' yStart='0'");
-    assert!(matches!(load(&bad), Err(SceneError::Attribute { .. })));
+    let bad = WALLS.replace("xStart='400' yStart='0'", "xStart='abc' yStart='0'");
+    match load(&bad) {
+        Err(SceneError::Attribute {
+            element, attribute, ..
+        }) => assert_eq!(
+            (element.as_str(), attribute.as_str()),
+            ("wall 'wall1'", "xStart")
+        ),
+        other => panic!("{other:?}"),
+    }
+    // A room corner and a piece of furniture.
+    let bad = WALLS.replace("<point x='400' y='300'/>", "<point x='400' y='inf'/>");
+    match load(&bad) {
+        Err(SceneError::NonFinite { element, attribute }) => {
+            assert_eq!(element, "point of room 'Kitchen'");
+            assert_eq!(attribute, "y");
+        }
+        other => panic!("{other:?}"),
+    }
+    let bad = WALLS.replace(
+        "</home>",
+        "<pieceOfFurniture id='p7' name='Chair' model='chair.obj' x='NaN' y='100' width='50' depth='50' height='90'/></home>",
+    );
+    match load(&bad) {
+        Err(SceneError::NonFinite { element, attribute }) => {
+            assert_eq!(element, "pieceOfFurniture 'p7'");
+            assert_eq!(attribute, "x");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+#[test]
+fn unknown_level_names_the_element() {
+    let bad = WALLS.replace("<wall id='wall1'", "<wall id='wall1' level='nowhere'");
+    match load(&bad) {
+        Err(SceneError::Attribute {
+            element,
+            attribute,
+            message,
+        }) => {
+            assert_eq!(element, "wall 'wall1'");
+            assert_eq!(attribute, "level");
+            assert!(message.contains("nowhere"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+    let bad = WALLS.replace("<room name='Kitchen'", "<room name='Kitchen' level='x'");
+    assert!(matches!(
+        load(&bad),
+        Err(SceneError::Attribute { element, .. }) if element == "room 'Kitchen'"
+    ));
 }
 
 #[test]
@@ -115,8 +163,67 @@ fn broken_archives_are_zip_errors() {
         let bytes = std::fs::read(p).unwrap();
         let cut = dir.join("truncated.sh3d");
         std::fs::write(&cut, &bytes[..bytes.len() / 3]).unwrap();
-        assert!(load_sh3d(&cut, &Sh3dOptions::default()).is_err());
+        assert!(matches!(
+            load_sh3d(&cut, &Sh3dOptions::default()),
+            Err(SceneError::Zip(_))
+        ));
     }
+    // Archives built here: no `Home.xml`, a garbled one, a missing model entry.
+    let archive = |name: &str, entries: &[(&str, &str)]| {
+        use std::io::Write;
+        let path = dir.join(name);
+        let mut z = zip::ZipWriter::new(std::fs::File::create(&path).unwrap());
+        for (entry, text) in entries {
+            z.start_file(*entry, zip::write::SimpleFileOptions::default())
+                .unwrap();
+            z.write_all(text.as_bytes()).unwrap();
+        }
+        z.finish().unwrap();
+        path
+    };
+    let no_home = archive("no_home.sh3d", &[("Home", "binary"), ("0", "v 0 0 0\n")]);
+    match load_sh3d(&no_home, &Sh3dOptions::default()) {
+        Err(SceneError::Zip(m)) => assert!(m.contains("Home.xml"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    let garbled = archive("garbled.sh3d", &[("Home.xml", "<home><wall id='w' <<>>")]);
+    assert!(matches!(
+        load_sh3d(&garbled, &Sh3dOptions::default()),
+        Err(SceneError::Xml { .. })
+    ));
+    let home = WALLS.replace(
+        "</home>",
+        "<pieceOfFurniture id='p9' name='Lamp' model='3' x='100' y='100' width='50' depth='50' height='50'/></home>",
+    );
+    let missing_model = archive(
+        "missing_model.sh3d",
+        &[("Home.xml", &home), ("0", "v 0 0 0\n")],
+    );
+    match load_sh3d(&missing_model, &Sh3dOptions::default()) {
+        Err(SceneError::MissingModel { element, model }) => {
+            assert_eq!(element, "pieceOfFurniture 'p9'");
+            assert_eq!(model, "3");
+        }
+        other => panic!("{other:?}"),
+    }
+    // The same archive with the model entry loads, and the model is used.
+    let ok = archive(
+        "ok.sh3d",
+        &[
+            ("Home.xml", &home),
+            (
+                "3",
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\n",
+            ),
+        ],
+    );
+    let s = load_sh3d(&ok, &Sh3dOptions::default()).unwrap();
+    let lamp = s.objects().find(|o| o.name == "Lamp").unwrap();
+    assert!(
+        (lamp.bounds.extents().x - 0.5).abs() < 1e-6,
+        "{:?}",
+        lamp.bounds
+    );
     let missing = load_sh3d(Path::new("/nonexistent/home.sh3d"), &Sh3dOptions::default());
     assert!(matches!(missing, Err(SceneError::Io { .. })));
     let _ = std::fs::remove_dir_all(&dir);

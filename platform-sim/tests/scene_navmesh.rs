@@ -194,15 +194,52 @@ proptest! {
         prop_assert!((dab - dba).abs() < 1e-6, "{} vs {}", dab, dba);
         prop_assert!(dac <= dab + dbc + 1e-9);
         prop_assert!(dab + 1e-9 >= (b - a).norm());
-        // the field agrees with the point-to-point query
+        // the field agrees with the point-to-point query, except that it
+        // measures a goal in walkable straight-line reach exactly
         let f = nav.geodesic_field(&[b]).unwrap();
-        prop_assert!((f.distance(nav, &a).unwrap() - dab).abs() < 1e-6);
+        let fa = f.distance(nav, &a).unwrap();
+        if (b - a).norm() > 0.5 {
+            prop_assert!((fa - dab).abs() < 1e-6, "{} vs {}", fa, dab);
+        } else {
+            prop_assert!(fa <= dab + 1e-6 && fa + 1e-9 >= (b - a).norm(), "{} vs {}", fa, dab);
+        }
         // the path is a polyline from a to b no shorter than the distance's straight-line bound
         let path = nav.path(&a, &b).unwrap().unwrap();
         prop_assert_eq!(path[0], a);
         prop_assert_eq!(*path.last().unwrap(), b);
         prop_assert!(path.iter().all(|q| nav.is_navigable(q)));
     }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+    /// Near a goal the field is the exact straight-line distance (the
+    /// success radius of 0.1 m is not distorted by the 5 cm spans); farther
+    /// away it is the span field.
+    #[test]
+    fn field_is_exact_near_goals(gx in 0.5f64..3.5, gy in 0.5f64..2.5, r in 0.0f64..0.29, t in 0.0f64..std::f64::consts::TAU) {
+        let scene = box_world(&[]);
+        let nav = NavMesh::build(&scene, &raw_config()).unwrap();
+        let g = Point3::new(gx, gy, 0.0);
+        let p = Point3::new(gx + r * t.cos(), gy + r * t.sin(), 0.0);
+        prop_assume!(p.x > 0.05 && p.x < 3.95 && p.y > 0.05 && p.y < 2.95);
+        let field = nav.geodesic_field(&[g]).unwrap();
+        prop_assert!((field.distance(&nav, &p).unwrap() - (p - g).norm()).abs() < 1e-9);
+    }
+}
+
+/// A wall between a query point and a goal 0.2 m away: the straight line is
+/// not walkable, so the field keeps the way around.
+#[test]
+fn field_near_goal_respects_walls() {
+    let scene = box_world(&[(1.95, 0.0, 0.1, 2.5, 1.5)]);
+    let nav = NavMesh::build(&scene, &raw_config()).unwrap();
+    let g = Point3::new(2.15, 1.0, 0.0);
+    let p = Point3::new(1.85, 1.0, 0.0);
+    let field = nav.geodesic_field(&[g]).unwrap();
+    let d = field.distance(&nav, &p).unwrap();
+    assert!(d > 2.0, "around the wall's end, got {d}");
 }
 
 #[test]
@@ -250,6 +287,141 @@ fn steps_connect_only_up_to_max_step() {
     assert!(nav.connected(&floor, &low).unwrap());
     assert!(!nav.connected(&floor, &high).unwrap());
     assert!(nav.distance(&floor, &high).unwrap().is_infinite());
+}
+
+/// A floor plate with solid boxes (x0, y0, z0, x1, y1, z1) and one-sided ramps
+/// (x0, y0, width, run, slope in degrees) rising along +x from the floor.
+fn world(boxes: &[[f64; 6]], ramps: &[(f64, f64, f64, f64, f64)]) -> Scene {
+    let mut b = MeshBuilder::new();
+    let f = b.add_instance(InstanceKind::Floor, "floor", "floor", 0);
+    b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(6.0, 3.0, 0.0), f);
+    for q in boxes {
+        let i = b.add_instance(InstanceKind::Object, "box", "box", 0);
+        b.aabb_box(
+            Point3::new(q[0], q[1], q[2]),
+            Point3::new(q[3], q[4], q[5]),
+            i,
+        );
+    }
+    for &(x, y, w, run, deg) in ramps {
+        let i = b.add_instance(InstanceKind::Stairs, "ramp", "ramp", 0);
+        let h = run * deg.to_radians().tan();
+        // counter-clockwise seen from above: the normal points up
+        b.quad(
+            Point3::new(x, y, 0.0),
+            Point3::new(x + run, y, h),
+            Point3::new(x + run, y + w, h),
+            Point3::new(x, y + w, 0.0),
+            i,
+        );
+    }
+    let level = Level {
+        name: "0".into(),
+        elevation: 0.0,
+        height: 2.5,
+        floor_thickness: 0.1,
+    };
+    Scene::from_description(b.finish("world", vec![level], vec![])).unwrap()
+}
+
+/// Surfaces steeper than 45 deg are not walkable; gentler ones are, at the
+/// surface's height.
+#[test]
+fn slopes_up_to_45_degrees_are_walkable() {
+    let scene = world(
+        &[],
+        &[(0.5, 0.5, 1.0, 1.0, 40.0), (3.5, 0.5, 1.0, 1.0, 50.0)],
+    );
+    let cfg = NavMeshConfig {
+        agent_radius: 0.0,
+        min_region_area: 0.0,
+        ..Default::default()
+    };
+    let nav = NavMesh::build(&scene, &cfg).unwrap();
+    // The column 0.50-0.55 m up the run (cells start at multiples of 0.05 m
+    // from the scene's bounds): its surface is the ramp's highest point there.
+    let on_ramp = |x: f64, deg: f64| {
+        let t = deg.to_radians().tan();
+        nav.heights_at(x, 1.0)
+            .iter()
+            .any(|z| (0.5 * t - 1e-3..=0.55 * t + 1e-3).contains(z))
+    };
+    assert!(on_ramp(1.025, 40.0), "{:?}", nav.heights_at(1.025, 1.0));
+    assert!(!on_ramp(4.025, 50.0), "{:?}", nav.heights_at(4.025, 1.0));
+    assert!(nav.heights_at(4.025, 1.0).iter().all(|z| *z < 0.1));
+    // A steeper threshold lets the 50 deg ramp through.
+    let steep = NavMeshConfig {
+        max_slope_deg: 55.0,
+        ..cfg
+    };
+    let nav = NavMesh::build(&scene, &steep).unwrap();
+    assert!(
+        nav.heights_at(4.025, 1.0).iter().any(|z| *z > 0.4),
+        "{:?}",
+        nav.heights_at(4.025, 1.0)
+    );
+}
+
+/// A floor is walkable only where the free height above it is at least the
+/// agent height (0.88 m); the top of what covers it is walkable too.
+#[test]
+fn clearance_needs_the_agent_height() {
+    let scene = world(
+        &[
+            [0.5, 0.5, 0.6, 1.5, 1.5, 0.7],
+            [2.5, 0.5, 1.0, 3.5, 1.5, 1.1],
+        ],
+        &[],
+    );
+    let cfg = NavMeshConfig {
+        agent_radius: 0.0,
+        min_region_area: 0.0,
+        ..Default::default()
+    };
+    let nav = NavMesh::build(&scene, &cfg).unwrap();
+    let low = nav.heights_at(1.025, 1.025);
+    let high = nav.heights_at(3.025, 1.025);
+    assert!(!low.iter().any(|z| z.abs() < 1e-4), "0.6 m free: {low:?}");
+    assert!(low.iter().any(|z| (z - 0.7).abs() < 1e-4), "{low:?}");
+    assert!(high.iter().any(|z| z.abs() < 1e-4), "1.0 m free: {high:?}");
+    assert!(high.iter().any(|z| (z - 1.1).abs() < 1e-4), "{high:?}");
+    let taller = NavMeshConfig {
+        agent_height: 1.2,
+        ..cfg
+    };
+    let nav = NavMesh::build(&scene, &taller).unwrap();
+    assert!(!nav.heights_at(3.025, 1.025).iter().any(|z| z.abs() < 1e-4));
+}
+
+/// Islands smaller than `min_region_area` are dropped, larger ones kept.
+#[test]
+fn small_islands_are_discarded() {
+    // platform tops at 0.5 m (out of step reach): 0.8 x 0.8 = 0.64 m^2 and
+    // 1.2 x 1.2 = 1.44 m^2
+    let scene = world(
+        &[
+            [0.5, 0.5, 0.0, 1.3, 1.3, 0.5],
+            [3.0, 0.5, 0.0, 4.2, 1.7, 0.5],
+        ],
+        &[],
+    );
+    let cfg = NavMeshConfig {
+        agent_radius: 0.0,
+        min_region_area: 1.0,
+        ..Default::default()
+    };
+    let nav = NavMesh::build(&scene, &cfg).unwrap();
+    let top = |x: f64, y: f64| nav.heights_at(x, y).iter().any(|z| (z - 0.5).abs() < 1e-4);
+    assert!(!top(0.925, 0.925), "small island kept");
+    assert!(top(3.625, 1.125), "large island dropped");
+    assert!(nav.region_areas().iter().all(|a| *a >= 1.0));
+    assert_eq!(nav.region_areas().len(), 2, "floor and the large platform");
+    let keep_all = NavMeshConfig {
+        min_region_area: 0.0,
+        ..cfg
+    };
+    let nav = NavMesh::build(&scene, &keep_all).unwrap();
+    assert_eq!(nav.region_areas().len(), 3);
 }
 
 #[test]

@@ -2,9 +2,12 @@
 
 use nalgebra::Point2;
 use proptest::prelude::*;
+use sornav_platform_sim::category::MP3D_GOALS;
+use sornav_platform_sim::episodes::{GeneratorConfig, goal_view_points};
 use sornav_platform_sim::geometry::point_in_polygon;
 use sornav_platform_sim::{
-    InstanceKind, NavMesh, NavMeshConfig, ProceduralConfig, RoomType, Scene,
+    CameraConfig, InstanceKind, NavMesh, NavMeshConfig, ProceduralConfig, RoomType, Scene,
+    SimConfig, Simulator,
 };
 
 /// Region containing most walkable area on the ground floor.
@@ -12,12 +15,30 @@ fn main_region(nav: &NavMesh) -> u32 {
     nav.largest_region().expect("walkable area")
 }
 
-/// Checks that every room has walkable floor in the main region and every
-/// object a navigable view point within 1 m; returns a description of failures.
+/// Checks that every room has walkable floor in the main region, every
+/// object a navigable point of the main region within 1 m, and every object
+/// of an ObjectNav category (MP3D's 21, which include HM3D's 6) a view point
+/// by the episode generator's definition (navigable, within 1 m, seeing the
+/// object at camera height) in the main region; returns a description of
+/// failures.
 fn check_house(seed: u64, cfg: &ProceduralConfig) -> Result<(), String> {
     let scene = Scene::procedural(seed, cfg).map_err(|e| e.to_string())?;
-    let nav = NavMesh::build(&scene, &NavMeshConfig::default()).map_err(|e| e.to_string())?;
-    let main = main_region(&nav);
+    let camera = CameraConfig {
+        width: 16,
+        height: 12,
+        ..CameraConfig::default()
+    };
+    let sim = Simulator::new(
+        scene,
+        SimConfig {
+            camera,
+            nav: NavMeshConfig::default(),
+            ..SimConfig::default()
+        },
+    )
+    .map_err(|e| e.to_string())?;
+    let (scene, nav) = (sim.scene(), sim.nav());
+    let main = main_region(nav);
     let spans: Vec<_> = (0..nav.span_count() as u32)
         .filter(|&s| nav.spans()[s as usize].region == main)
         .map(|s| nav.span_center(s))
@@ -40,6 +61,25 @@ fn check_house(seed: u64, cfg: &ProceduralConfig) -> Result<(), String> {
             return Err(format!(
                 "seed {seed}: object {} ({}) has no view point",
                 o.id, o.category
+            ));
+        }
+    }
+    let generator = GeneratorConfig::default();
+    for o in scene
+        .objects()
+        .filter(|o| MP3D_GOALS.contains(&o.category.as_str()))
+    {
+        let vps = goal_view_points(&sim, o, &generator);
+        let reachable = vps.iter().any(|v| {
+            nav.span_at(&v.position)
+                .is_some_and(|s| nav.spans()[s as usize].region == main)
+        });
+        if !reachable {
+            return Err(format!(
+                "seed {seed}: target {} ({}) has no reachable view point ({} in all)",
+                o.id,
+                o.category,
+                vps.len()
             ));
         }
     }

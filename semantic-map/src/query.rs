@@ -53,8 +53,10 @@ impl ClusterQuery {
         self
     }
 
-    /// Whether `c` satisfies every criterion. A non-finite point or radius
-    /// matches nothing.
+    /// Whether `c` satisfies every criterion. The radius test is
+    /// `horizontal_distance(point, centre) <= radius`, so a NaN point
+    /// coordinate or radius matches nothing and an infinite radius (with a
+    /// finite point) matches every centre.
     pub fn matches(&self, c: &ObjectCluster) -> bool {
         if self.label.is_some_and(|l| l != c.label) || c.support < self.min_support {
             return false;
@@ -131,5 +133,30 @@ impl SemanticMap {
     /// most, so a linear scan beats maintaining a spatial index).
     pub fn query(&self, query: &ClusterQuery) -> Vec<&ObjectCluster> {
         self.clusters().filter(|c| query.matches(c)).collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::{LabelSet, LabeledPoint, MapConfig};
+
+    #[test]
+    fn non_finite_radius_and_point_follow_the_documented_rule() {
+        let mut map = SemanticMap::new(MapConfig::default(), LabelSet::household()).unwrap();
+        let pts: Vec<_> = (0..3)
+            .map(|i| LabeledPoint::new(1.025 + 0.05 * i as f32, 1.025, 0.525, LabelId(10)))
+            .collect();
+        map.integrate_points(&Point3::origin(), &pts).unwrap();
+        map.update_clusters();
+        assert_eq!(map.cluster_count(), 1);
+        let o = Point3::origin();
+        assert_eq!(map.clusters_within(o, f64::NAN).count(), 0);
+        assert_eq!(map.clusters_within(o, f64::INFINITY).count(), 1);
+        let nan = Point3::new(f64::NAN, 0.0, 0.0);
+        assert_eq!(map.clusters_within(nan, f64::INFINITY).count(), 0);
+        let q = ClusterQuery::default().within(o, f64::NAN);
+        assert!(map.query(&q).is_empty());
+        assert_eq!(map.query(&ClusterQuery::default().within(o, 2.0)).len(), 1);
     }
 }

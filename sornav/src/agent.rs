@@ -184,6 +184,25 @@ fn explore_mission(graph: &FrontierGraph, id: FrontierId, z: f64) -> Option<Miss
     })
 }
 
+/// Floor returns on a `resolution` lattice covering the disk of `radius`
+/// around the robot: the floor the robot stands on is free (the occupancy
+/// grid marks floor returns free and carves the rays to them).
+fn footprint_points(pose: &RobotPose, radius: f64, resolution: f64, points: &mut Vec<Point3<f64>>) {
+    if !(radius > 0.0 && resolution > 0.0) {
+        return;
+    }
+    let n = (radius / resolution).floor() as i32;
+    let p = pose.position;
+    for i in -n..=n {
+        for j in -n..=n {
+            let (dx, dy) = (f64::from(i) * resolution, f64::from(j) * resolution);
+            if dx.hypot(dy) <= radius {
+                points.push(Point3::new(p.x + dx, p.y + dy, p.z));
+            }
+        }
+    }
+}
+
 /// S_r and the top-K candidate clusters (Algorithm 1's inputs).
 fn region_context(
     cg: &ClusterGraph<FrontierId>,
@@ -391,7 +410,15 @@ impl Agent {
             return Err(e.into());
         }
         let origin = observation.origin();
-        let (points, occupancy_rejected) = observation.occupancy_points(&self.config.depth);
+        let (mut points, occupancy_rejected) =
+            observation.occupancy_points(&self.config.depth, self.config.occupancy_max_columns);
+        let sensor_points = points.len() as u64;
+        footprint_points(
+            &observation.pose,
+            self.config.footprint_free_radius_m,
+            self.config.frontier.grid.resolution,
+            &mut points,
+        );
         let update = match self.frontiers.update(&origin, &points) {
             Ok(u) => u,
             Err(e) => {
@@ -419,7 +446,8 @@ impl Agent {
             points: stats.points,
             semantic_accepted: stats.accepted,
             semantic_rejected: stats.rejected(),
-            occupancy_points: points.len() as u64,
+            occupancy_points: sensor_points,
+            footprint_points: points.len() as u64 - sensor_points,
             occupancy_rejected,
             objects: self.semantic.cluster_count(),
             target_detections: 0,
@@ -521,7 +549,12 @@ impl Agent {
                 }
             }
             MissionKind::Explore { frontier } => {
-                if failed {
+                // A frontier that is still there once its viewpoint is
+                // reached cannot be observed away from there (floor below
+                // the camera's view, a shadow behind furniture): excluding
+                // it keeps the robot from returning to it forever. A
+                // frontier that changes gets a new id and is eligible again.
+                if failed || reached {
                     self.exclude(FrontierId(frontier.0));
                 }
             }
@@ -575,6 +608,23 @@ impl Agent {
     fn dispatch(
         &mut self,
         now: Duration,
+        mission: Mission,
+        path: Vec<Point3<f64>>,
+        action: &str,
+        reason: String,
+    ) -> Result<AgentCommand, AgentError> {
+        let step = match mission.kind {
+            MissionKind::NavToObject { .. } => DecisionStep::TargetAccepted,
+            _ => DecisionStep::PolicyEvaluated,
+        };
+        self.dispatch_as(now, step, mission, path, action, reason)
+    }
+
+    /// [`dispatch`](Self::dispatch) with the decision logged under `step`.
+    fn dispatch_as(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
         mut mission: Mission,
         path: Vec<Point3<f64>>,
         action: &str,
@@ -583,10 +633,6 @@ impl Agent {
         if !path.is_empty() {
             mission = mission.with_path(path);
         }
-        let step = match mission.kind {
-            MissionKind::NavToObject { .. } => DecisionStep::TargetAccepted,
-            _ => DecisionStep::PolicyEvaluated,
-        };
         let cmd = self.submit(mission)?;
         let id = self.executor.active().map(|(id, _)| id);
         self.decide(now, step, action, id, reason);
@@ -770,7 +816,10 @@ impl Agent {
         // 5. Decision -> mission -> command.
         let active = self.executor.active().map(|(id, m)| (id, m.kind));
         let explore = match (&command, &route) {
-            (SupervisorCommand::Explore { .. }, Some(r)) => explore_mission(graph, r.first, z),
+            (
+                SupervisorCommand::Explore { .. } | SupervisorCommand::ExploreNewRegion { .. },
+                Some(r),
+            ) => explore_mission(graph, r.first, z),
             _ => None,
         };
         let relocation = match &command {
@@ -849,17 +898,29 @@ impl Agent {
                     ),
                 }
             }
-            SupervisorCommand::Explore { reason, .. } => {
-                self.stats.policy_evaluations += 1;
+            SupervisorCommand::Explore { .. } | SupervisorCommand::ExploreNewRegion { .. } => {
+                let (step, reason) = match command {
+                    SupervisorCommand::ExploreNewRegion { remaining_s, .. } => (
+                        DecisionStep::RegionDwell,
+                        format!(
+                            "exploring the region the relocation reached; the policy resumes in {remaining_s:.1} s"
+                        ),
+                    ),
+                    SupervisorCommand::Explore { reason, .. } => {
+                        self.stats.policy_evaluations += 1;
+                        (DecisionStep::PolicyEvaluated, reason)
+                    }
+                    _ => unreachable!("matched above"),
+                };
                 match explore {
                     Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => {
-                        self.dispatch(now, mission, Vec::new(), "explore", reason)?
+                        self.dispatch_as(now, step, mission, Vec::new(), "explore", reason)?
                     }
-                    Some(_) => self.keep_going(now, DecisionStep::PolicyEvaluated, reason),
+                    Some(_) => self.keep_going(now, step, reason),
                     None if active.is_none() => {
                         self.decide(
                             now,
-                            DecisionStep::PolicyEvaluated,
+                            step,
                             "exhausted",
                             None,
                             format!("no reachable frontier ({reason})"),
@@ -868,7 +929,7 @@ impl Agent {
                     }
                     None => self.keep_going(
                         now,
-                        DecisionStep::PolicyEvaluated,
+                        step,
                         format!("no reachable frontier; finishing the active mission ({reason})"),
                     ),
                 }
@@ -940,6 +1001,32 @@ impl Agent {
                 })
             }
         }
+    }
+
+    /// An executable path on the agent's own traversability map from `from`
+    /// to `to` (horizontal coordinates; `z` is copied from `from`), for
+    /// platforms that re-plan a mission's path as the map grows. Both
+    /// points are snapped to the nearest traversable cell within the
+    /// frontier map's snap radius. `Ok(None)` when they are not connected
+    /// on the current map.
+    ///
+    /// # Errors
+    /// [`AgentError::Frontier`] for non-finite or out-of-range points.
+    ///
+    /// # Complexity
+    /// One early-terminating grid search: O(N log N) in the traversable
+    /// cells nearer to `from` than `to` is.
+    pub fn plan_path(
+        &mut self,
+        from: &Point3<f64>,
+        to: &Point3<f64>,
+    ) -> Result<Option<Vec<Point3<f64>>>, AgentError> {
+        let a = Point2::new(from.x, from.y);
+        let b = Point2::new(to.x, to.y);
+        Ok(self
+            .frontiers
+            .path(&a, &b)?
+            .map(|edge| lift(&edge.path, from.z)))
     }
 
     /// Objects of the semantic map with their normalised categories.

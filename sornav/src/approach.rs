@@ -15,13 +15,38 @@ pub(crate) fn distance_to_box(p: &Point2<f64>, lo: &Point2<f64>, hi: &Point2<f64
     dx.hypot(dy)
 }
 
-/// A traversable waypoint within `standoff_m` of the object's horizontal
-/// bounds `(lo, hi)` that the robot can reach, with its executable path.
+/// Whether the segment from `p` to the nearest point of the box `[lo, hi]`
+/// crosses no occupied cell outside the box (the object's own cells, and
+/// one cell around them, do not count).
+pub(crate) fn line_of_sight(
+    grid: &sornav_frontier_graph::OccupancyGrid,
+    p: &Point2<f64>,
+    lo: &Point2<f64>,
+    hi: &Point2<f64>,
+) -> bool {
+    let q = Point2::new(p.x.clamp(lo.x, hi.x), p.y.clamp(lo.y, hi.y));
+    let res = grid.resolution();
+    let n = ((q - p).norm() / (res / 2.0)).ceil() as usize;
+    (0..=n).all(|i| {
+        let s = p + (q - p) * (i as f64 / n.max(1) as f64);
+        if distance_to_box(&s, lo, hi) <= res {
+            return true;
+        }
+        grid.cell_of(&s)
+            .is_ok_and(|c| grid.state(c) != sornav_frontier_graph::CellState::Occupied)
+    })
+}
+
+/// A traversable waypoint within `[min_standoff_m, standoff_m]` of the
+/// object's horizontal bounds `(lo, hi)` that the robot can reach, with its
+/// executable path.
 ///
 /// # Algorithm
 /// Points on a `sample_step_m` lattice around the bounds are kept when
-/// their distance to the bounds is at most `standoff_m` and their grid cell
-/// is traversable (free, outside the inflated obstacles). The
+/// their distance to the bounds is in `[min_standoff_m, standoff_m]` and
+/// their grid cell is traversable (free, outside the inflated obstacles).
+/// With `line_of_sight`, the points that see the bounds on the occupancy
+/// grid ([`line_of_sight`]) are used when there are any. The
 /// `max_path_queries` candidates nearest to the robot (Euclidean) are
 /// tried with the frontier map's exact shortest path; the one with the
 /// shortest path wins. `Ok(None)` when none is reachable.
@@ -51,7 +76,8 @@ pub(crate) fn approach_waypoint(
                 lo.x - reach + i as f64 * step,
                 lo.y - reach + j as f64 * step,
             );
-            if distance_to_box(&p, &lo, &hi) > reach {
+            let d = distance_to_box(&p, &lo, &hi);
+            if d > reach || d < config.min_standoff_m {
                 continue;
             }
             let Ok(cell) = grid.cell_of(&p) else {
@@ -60,6 +86,16 @@ pub(crate) fn approach_waypoint(
             if grid.is_traversable(cell) {
                 samples.push(p);
             }
+        }
+    }
+    if config.line_of_sight {
+        let seeing: Vec<Point2<f64>> = samples
+            .iter()
+            .copied()
+            .filter(|p| line_of_sight(grid, p, &lo, &hi))
+            .collect();
+        if !seeing.is_empty() {
+            samples = seeing;
         }
     }
     samples.sort_by(|a, b| (a - robot).norm().total_cmp(&(b - robot).norm()));
@@ -121,6 +157,19 @@ mod tests {
         map
     }
 
+    #[test]
+    fn line_of_sight_is_blocked_by_occupied_cells_only() {
+        // Occluder seen from the origin; the target box lies behind it.
+        let (blo, bhi) = (Point2::new(1.5, -0.5), Point2::new(1.7, 0.5));
+        let map = room_with_box(blo, bhi);
+        let (lo, hi) = (Point2::new(2.5, -0.2), Point2::new(2.9, 0.2));
+        let grid = map.grid();
+        assert!(!line_of_sight(grid, &Point2::new(1.2, 0.0), &lo, &hi));
+        assert!(line_of_sight(grid, &Point2::new(2.6, 1.2), &lo, &hi));
+        // The occluder's own cells never block a view of the occluder.
+        assert!(line_of_sight(grid, &Point2::new(1.2, 0.0), &blo, &bhi));
+    }
+
     proptest! {
         #![proptest_config(ProptestConfig::with_cases(16))]
 
@@ -166,6 +215,8 @@ mod tests {
                     if !map.grid().is_traversable(c) {
                         continue;
                     }
+                    // The room holds no other obstacle: every sample sees the box.
+                    prop_assert!(line_of_sight(map.grid(), &s, &lo, &hi));
                     if let Some(e) = map.path(&robot, &s).unwrap() {
                         brute = brute.min(e.length);
                     }

@@ -95,6 +95,15 @@ pub struct ApproachConfig {
     /// bounds. Default 0.45: with the executor's 0.5 m arrival radius the
     /// robot ends within 0.95 m of the object (the report criterion is 1 m).
     pub standoff_m: f64,
+    /// Smallest horizontal distance (m) from the waypoint to the object's
+    /// bounds (default 0: as close as traversable). A camera looking level
+    /// sees little of a low object from right next to it.
+    pub min_standoff_m: f64,
+    /// Prefer waypoints with a clear line of sight to the object on the
+    /// occupancy grid (no occupied cell between the waypoint and the
+    /// object's bounds); others are used only when none has one. Default
+    /// true.
+    pub line_of_sight: bool,
     /// Spacing (m) of the candidate waypoints sampled around the object.
     /// Default 0.1.
     pub sample_step_m: f64,
@@ -106,6 +115,8 @@ impl Default for ApproachConfig {
     fn default() -> Self {
         Self {
             standoff_m: 0.45,
+            min_standoff_m: 0.0,
+            line_of_sight: true,
             sample_step_m: 0.1,
             max_path_queries: 8,
         }
@@ -212,6 +223,15 @@ pub struct AgentConfig {
     pub executor: ExecutorConfig,
     /// Placement of `NAV_TO_OBJECT` waypoints.
     pub approach: ApproachConfig,
+    /// Radius (m) of the disk around the robot's pose that every
+    /// observation marks as free floor: the robot stands there, and a
+    /// camera does not see the floor next to its base (default 0.18, the
+    /// robot radius; 0 disables).
+    pub footprint_free_radius_m: f64,
+    /// Depth frames are subsampled for the occupancy grid to at most this
+    /// many columns (same stride in rows; default 160, 0 = every pixel).
+    /// The semantic map still uses every `depth.stride`-th pixel.
+    pub occupancy_max_columns: u32,
 }
 
 impl Default for AgentConfig {
@@ -225,10 +245,15 @@ impl Default for AgentConfig {
             gate: GateConfig::default(),
             horizon: RecedingHorizon::default(),
             ordering: FrontierOrdering::default(),
-            supervisor: SupervisorConfig::default(),
+            supervisor: SupervisorConfig {
+                region_dwell_s: 20.0,
+                ..SupervisorConfig::default()
+            },
             policy: PolicyConfig::default(),
             executor: ExecutorConfig::default(),
             approach: ApproachConfig::default(),
+            footprint_free_radius_m: 0.18,
+            occupancy_max_columns: 160,
         }
     }
 }
@@ -271,17 +296,38 @@ impl AgentConfig {
     /// follows the simulator's ground truth, which the agent never sees; the
     /// simulator harness runs it directly.
     pub fn for_variant(variant: Variant) -> Result<Self, ConfigError> {
-        let mut c = Self::default();
+        Self::default().with_variant(variant)
+    }
+
+    /// This configuration turned into an evaluation variant: only the
+    /// context policy and the frontier ordering change. For
+    /// [`Variant::Sornav`] the configured policy is kept (commonsense by
+    /// default, or an LLM policy).
+    ///
+    /// # Errors
+    /// [`ConfigError::NotAnAgentVariant`] for [`Variant::Oracle`].
+    pub fn with_variant(mut self, variant: Variant) -> Result<Self, ConfigError> {
         match variant {
-            Variant::Sornav => {}
-            Variant::NoGate => c.policy = PolicyConfig::NeverRelocate,
+            Variant::Sornav => {
+                if self.policy == PolicyConfig::NeverRelocate {
+                    self.policy = PolicyConfig::default();
+                }
+                self.ordering = FrontierOrdering::Tsp;
+            }
+            Variant::NoGate => {
+                self.policy = PolicyConfig::NeverRelocate;
+                self.ordering = FrontierOrdering::Tsp;
+            }
             Variant::NearestFrontier => {
-                c.policy = PolicyConfig::NeverRelocate;
-                c.ordering = FrontierOrdering::Nearest;
+                self.policy = PolicyConfig::NeverRelocate;
+                self.ordering = FrontierOrdering::Nearest;
             }
             Variant::SemanticRanking => {
-                c.policy = PolicyConfig::NeverRelocate;
-                c.ordering = FrontierOrdering::SemanticRanking(SemanticRankingConfig::default());
+                self.policy = PolicyConfig::NeverRelocate;
+                if !matches!(self.ordering, FrontierOrdering::SemanticRanking(_)) {
+                    self.ordering =
+                        FrontierOrdering::SemanticRanking(SemanticRankingConfig::default());
+                }
             }
             Variant::Oracle => {
                 return Err(ConfigError::NotAnAgentVariant(
@@ -290,7 +336,7 @@ impl AgentConfig {
                 ));
             }
         }
-        Ok(c)
+        Ok(self)
     }
 
     /// Parses and validates a TOML document.
@@ -390,11 +436,15 @@ impl AgentConfig {
         match &self.policy {
             PolicyConfig::Commonsense(c) => {
                 c.validate().map_err(|e| component("policy", e))?;
-                agree(
-                    "R_s",
-                    ("cluster.r_s", self.cluster.r_s),
-                    ("policy.candidate_radius_m", c.candidate_radius_m),
-                )?;
+                if c.candidate_radius_m > self.cluster.r_s {
+                    return Err(ConfigError::Inconsistent {
+                        parameter: "R_s",
+                        message: format!(
+                            "policy.candidate_radius_m = {} exceeds cluster.r_s = {}: S_k holds no object farther than R_s",
+                            c.candidate_radius_m, self.cluster.r_s
+                        ),
+                    });
+                }
                 agree(
                     "N_min",
                     ("cluster.n_min", self.cluster.n_min as f64),
@@ -416,15 +466,25 @@ impl AgentConfig {
         self.executor
             .validate()
             .map_err(|e| component("executor", e))?;
+        let r = self.footprint_free_radius_m;
+        if !(r.is_finite() && (0.0..=5.0).contains(&r)) {
+            return Err(component(
+                "footprint_free_radius_m",
+                "need a finite radius in [0, 5] m",
+            ));
+        }
         let a = &self.approach;
         let positive = |v: f64| v.is_finite() && v > 0.0;
         if !(positive(a.standoff_m) && positive(a.sample_step_m))
             || a.standoff_m / a.sample_step_m > 200.0
             || a.max_path_queries == 0
+            || !(a.min_standoff_m.is_finite()
+                && a.min_standoff_m >= 0.0
+                && a.min_standoff_m < a.standoff_m)
         {
             return Err(component(
                 "approach",
-                "need standoff_m > 0, sample_step_m > 0, at most 200 samples per axis, max_path_queries >= 1",
+                "need standoff_m > 0, 0 <= min_standoff_m < standoff_m, sample_step_m > 0, at most 200 samples per axis, max_path_queries >= 1",
             ));
         }
         agree(

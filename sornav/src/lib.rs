@@ -116,7 +116,9 @@ pub use config::{
     Variant,
 };
 pub use error::{AgentError, ConfigError, ObservationError};
-pub use observation::{CloudObservation, DepthObservation, Observation, ObservationReport, Sensor};
+pub use observation::{
+    CloudObservation, DepthObservation, Observation, ObservationReport, Sensor, occupancy_stride,
+};
 pub use ordering::Route;
 pub use snapshot::{
     AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,

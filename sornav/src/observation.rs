@@ -66,6 +66,9 @@ pub struct ObservationReport {
     /// Points kept out of the occupancy grid (non-finite, or a missing /
     /// too-near depth).
     pub occupancy_rejected: u64,
+    /// Free-floor points added under the robot's footprint
+    /// ([`AgentConfig::footprint_free_radius_m`](crate::AgentConfig::footprint_free_radius_m)).
+    pub footprint_points: u64,
     /// Object clusters after the update.
     pub objects: usize,
     /// Clusters of the target category detected in this frame.
@@ -136,19 +139,24 @@ impl Observation {
     /// The frame's returns as world points for the occupancy grid, and the
     /// number left out.
     ///
-    /// Depth pixels are back-projected with the depth window's stride; a
-    /// depth below `min_depth`, zero, NaN or infinite is left out (no
-    /// information); a depth beyond `max_depth` is kept (the grid only
-    /// carves free space along returns beyond its range). Non-finite cloud
-    /// points are left out.
+    /// Depth pixels are back-projected with the depth window's stride, or
+    /// a larger one so that at most `max_columns` columns are used (`0`: no
+    /// limit; see [`occupancy_stride`]); a depth below `min_depth`, zero,
+    /// NaN or infinite is left out (no information); a depth beyond
+    /// `max_depth` is kept (the grid only carves free space along returns
+    /// beyond its range). Non-finite cloud points are left out.
     ///
     /// # Complexity
     /// O(pixels / stride^2) or O(points).
-    pub fn occupancy_points(&self, options: &DepthOptions) -> (Vec<Point3<f64>>, u64) {
+    pub fn occupancy_points(
+        &self,
+        options: &DepthOptions,
+        max_columns: u32,
+    ) -> (Vec<Point3<f64>>, u64) {
         let mut rejected = 0;
         let points = match &self.sensor {
             Sensor::Depth(d) => {
-                let stride = options.stride.max(1) as usize;
+                let stride = occupancy_stride(options.stride, d.camera.width, max_columns);
                 let (w, h) = (d.camera.width as usize, d.camera.height as usize);
                 let mut out = Vec::with_capacity((w / stride + 1) * (h / stride + 1));
                 for v in (0..h).step_by(stride) {
@@ -182,5 +190,47 @@ impl Observation {
             }
         };
         (points, rejected)
+    }
+}
+
+/// The pixel stride of a depth frame for the occupancy grid: the depth
+/// window's `stride`, raised so that at most `max_columns` of the `width`
+/// columns are used (`max_columns == 0`: no limit). A 2-D grid at 5 cm
+/// needs far fewer rays than a 640-pixel-wide camera gives (0.12 degrees
+/// apart, 1 cm at 5 m), and each ray costs its length in cells.
+pub fn occupancy_stride(stride: u32, width: u32, max_columns: u32) -> usize {
+    let base = stride.max(1) as usize;
+    if max_columns == 0 {
+        return base;
+    }
+    base.max((width as usize).div_ceil(max_columns as usize))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn occupancy_stride_examples() {
+        assert_eq!(occupancy_stride(1, 640, 160), 4);
+        assert_eq!(occupancy_stride(1, 160, 160), 1);
+        assert_eq!(occupancy_stride(1, 161, 160), 2);
+        assert_eq!(occupancy_stride(3, 160, 160), 3);
+        assert_eq!(occupancy_stride(0, 640, 0), 1);
+    }
+
+    proptest! {
+        /// The stride never drops below the depth window's, and leaves at
+        /// most `max_columns` columns, and is the smallest that does.
+        #[test]
+        fn occupancy_stride_is_the_smallest_sufficient(stride in 0u32..8, width in 1u32..4000, max in 1u32..1000) {
+            let s = occupancy_stride(stride, width, max);
+            prop_assert!(s >= stride.max(1) as usize);
+            prop_assert!((width as usize).div_ceil(s) <= max as usize);
+            if s > stride.max(1) as usize {
+                prop_assert!((width as usize).div_ceil(s - 1) > max as usize);
+            }
+        }
     }
 }

@@ -29,6 +29,10 @@ pub enum DecisionStep {
     RateLimited,
     /// The context policy was asked: relocate or explore (lines 4-8).
     PolicyEvaluated,
+    /// A relocation just ended: its region is explored (the route's first
+    /// frontier) before the policy is asked again
+    /// (`supervisor.region_dwell_s`).
+    RegionDwell,
 }
 
 /// One decision of [`Agent::step`](crate::Agent::step).

@@ -74,6 +74,27 @@ fn unknown_fields_and_bad_values_are_errors() {
         AgentConfig::from_toml(bad_k),
         Err(ConfigError::Inconsistent { parameter: "K", .. })
     ));
+    let wide = "[cluster]\nr_s = 2.0\n";
+    assert!(matches!(
+        AgentConfig::from_toml(wide),
+        Err(ConfigError::Inconsistent {
+            parameter: "R_s",
+            ..
+        })
+    ));
+    let footprint = "footprint_free_radius_m = -1.0\n";
+    assert!(matches!(
+        AgentConfig::from_toml(footprint),
+        Err(ConfigError::Component { .. })
+    ));
+    let standoff = "[approach]\nmin_standoff_m = 0.5\nstandoff_m = 0.4\n";
+    assert!(matches!(
+        AgentConfig::from_toml(standoff),
+        Err(ConfigError::Component {
+            component: "approach",
+            ..
+        })
+    ));
     let bad_rho = "[cluster]\nrho_c = -1.0\n";
     assert!(matches!(
         AgentConfig::from_toml(bad_rho),

@@ -220,6 +220,12 @@ fn invalid_points_inside_a_valid_frame_are_counted() {
     assert_eq!(report.semantic_rejected, 2);
     assert_eq!(report.occupancy_rejected, 2);
     assert_eq!(report.occupancy_points, 50);
+    // The free footprint: the 0.05 m lattice points of the 0.18 m disk.
+    let lattice = (-3i32..=3)
+        .flat_map(|i| (-3i32..=3).map(move |j| (i, j)))
+        .filter(|(i, j)| (0.05 * f64::from(*i)).hypot(0.05 * f64::from(*j)) <= 0.18)
+        .count() as u64;
+    assert_eq!(report.footprint_points, lattice);
     assert_eq!(agent.stats().rejected_points, 4);
 }
 

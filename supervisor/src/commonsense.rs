@@ -46,8 +46,12 @@ pub struct CommonsenseConfig {
     pub min_informative_objects: usize,
     /// `Conflict` needs `P(g | S_r)` below this.
     pub conflict_max_posterior: f64,
-    /// Candidate objects farther than this from their cluster are ignored
-    /// (`R_s`, metres).
+    /// Candidate objects farther than this from their cluster are not
+    /// evidence about the candidate region (metres; default 3). `S_k`
+    /// lists objects up to `R_s` = 10 m away (what an LLM is shown, with
+    /// distances to weigh); this policy reads presence only, and with a
+    /// 10 m radius every candidate of a small house would share the
+    /// current context's objects, so none could ever beat it.
     pub candidate_radius_m: f64,
     /// Graph-distance discount scale, metres: score = `P_k exp(-d_k / scale)`.
     pub distance_scale_m: f64,
@@ -61,7 +65,7 @@ impl Default for CommonsenseConfig {
             min_support: 10.0,
             min_informative_objects: 3,
             conflict_max_posterior: 0.05,
-            candidate_radius_m: 10.0,
+            candidate_radius_m: 3.0,
             distance_scale_m: 20.0,
             margin: 0.1,
         }

@@ -356,6 +356,124 @@ mod tests {
         assert!(CooccurrencePrior::from_json("{").is_err());
     }
 
+    fn region(scene: &str, split: Split, labels: &[&str]) -> Hm3dRegion {
+        Hm3dRegion {
+            scene: scene.into(),
+            region: 0,
+            split,
+            labels: labels.iter().map(|l| (*l).to_owned()).collect(),
+        }
+    }
+
+    #[test]
+    fn build_counts_match_a_hand_count_and_ignore_val() {
+        let regions = [
+            region("a", Split::Train, &["toilet", "sink", "towel"]),
+            region("a", Split::Train, &["bed", "lamp"]),
+            region("b", Split::Train, &["toilet", "sink"]),
+            region("b", Split::Train, &["sink", "lamp", "bed"]),
+            region("c", Split::Train, &["rare"]),
+            // Val regions must not count at all.
+            region("v", Split::Val, &["toilet", "bed", "sink", "lamp"]),
+            region("v", Split::Val, &["toilet", "rare", "rare2"]),
+        ];
+        let config = PriorBuildConfig {
+            min_regions: 2,
+            ..PriorBuildConfig::default()
+        };
+        let p = CooccurrencePrior::build(regions.iter(), config).unwrap();
+        assert_eq!((p.train_scenes, p.train_regions), (3, 5));
+        // Labels in >= 2 train regions: toilet 2, sink 3, bed 2, lamp 2
+        // (towel 1 and rare 1 are dropped; val counts nothing).
+        let labels: Vec<(&str, u64)> = p.labels.iter().map(|(l, n)| (l.as_str(), *n)).collect();
+        assert_eq!(
+            labels,
+            [("bed", 2), ("lamp", 2), ("sink", 3), ("toilet", 2)]
+        );
+        // Target rows: only ObjectNav/MP3D categories in the vocabulary.
+        let targets: Vec<&str> = p.targets.keys().map(String::as_str).collect();
+        assert_eq!(targets, ["bed", "sink", "toilet"]);
+        let toilet = &p.targets["toilet"];
+        assert_eq!(toilet.regions, 2);
+        let co: Vec<(&str, u64)> = toilet
+            .cooccurrence
+            .iter()
+            .map(|(l, n)| (l.as_str(), *n))
+            .collect();
+        assert_eq!(co, [("sink", 2), ("toilet", 2)]);
+        let bed = &p.targets["bed"];
+        assert_eq!(bed.regions, 2);
+        assert_eq!(bed.cooccurrence.get("lamp"), Some(&2));
+        assert_eq!(bed.cooccurrence.get("sink"), Some(&1));
+        assert_eq!(bed.cooccurrence.get("toilet"), None);
+        // A val-only build has nothing to learn from.
+        assert!(
+            CooccurrencePrior::build(regions[5..].iter(), PriorBuildConfig::default()).is_err()
+        );
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(256))]
+
+        /// `posterior` equals a direct transcription of the module's formula
+        /// on the embedded table (unknown labels, other spellings and
+        /// duplicates in the input are ignored).
+        #[test]
+        fn posterior_matches_the_documented_formula(
+            t in 0usize..6,
+            picks in proptest::collection::vec(0usize..400, 0..12),
+            noise in proptest::collection::vec(0usize..3, 0..4),
+        ) {
+            let p = CooccurrencePrior::embedded();
+            let g = OBJECTNAV_CATEGORIES[t];
+            let vocab: Vec<&str> = p.labels.keys().map(String::as_str).collect();
+            let mut input: Vec<String> = picks
+                .iter()
+                .map(|&k| vocab[k % vocab.len()].to_owned())
+                .collect();
+            // Duplicates, another spelling, unknown and structural labels.
+            input.extend(input.first().cloned());
+            for &k in &noise {
+                input.push(["mystery gadget", "WALL", "Door_Frame"][k].to_owned());
+            }
+            if let Some(first) = input.first().cloned() {
+                input.push(first.to_uppercase().replace(' ', "_"));
+            }
+            let post = p.posterior(g, input.iter().map(String::as_str)).unwrap();
+
+            let distinct: BTreeSet<&str> = picks.iter().map(|&k| vocab[k % vocab.len()]).collect();
+            let a = p.config.smoothing;
+            let n = p.train_regions as f64;
+            let row = &p.targets[g];
+            let ng = row.regions as f64;
+            let prior_logit = ((ng + a) / (n - ng + a)).ln();
+            proptest::prop_assert_eq!(post.informative_labels, distinct.len());
+            if distinct.contains(g) {
+                proptest::prop_assert!(post.target_observed);
+                proptest::prop_assert_eq!(post.probability, 1.0);
+            } else {
+                let llr: f64 = distinct
+                    .iter()
+                    .map(|l| {
+                        let nl = p.labels[*l] as f64;
+                        let ngl = row.cooccurrence.get(*l).copied().unwrap_or(0) as f64;
+                        ((ngl + a) / (ng + 2.0 * a)).ln() - ((nl - ngl + a) / (n - ng + 2.0 * a)).ln()
+                    })
+                    .sum();
+                let k = distinct.len() as f64;
+                let logit = if distinct.is_empty() {
+                    prior_logit
+                } else {
+                    prior_logit + llr / k.powf(p.config.evidence_exponent)
+                };
+                let expected = 1.0 / (1.0 + (-logit).exp());
+                proptest::prop_assert!((post.probability - expected).abs() <= 1e-12);
+                proptest::prop_assert!((0.0..=1.0).contains(&post.probability));
+            }
+            proptest::prop_assert!((post.base_rate - 1.0 / (1.0 + (-prior_logit).exp())).abs() <= 1e-15);
+        }
+    }
+
     #[test]
     fn empty_context_gives_the_base_rate_and_unknown_target_none() {
         let p = CooccurrencePrior::embedded();

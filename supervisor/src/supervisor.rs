@@ -15,9 +15,17 @@
 //! only built when steps 2-4 did not already decide. Every decision is
 //! logged with `tracing` (target `sornav_supervisor`).
 //!
-//! One addition to the paper's listing: when no mission is active
-//! ([`MissionKind::Idle`]), step 4 does not hold the decision back, since
-//! there is no frontier mission to continue.
+//! Two additions to the paper's listing:
+//! * when no mission is active ([`MissionKind::Idle`]), step 4 does not hold
+//!   the decision back, since there is no frontier mission to continue;
+//! * after a relocation ends, the region it reached is explored for
+//!   [`SupervisorConfig::region_dwell_s`] before the policy is asked again
+//!   (steps 5-7 become "EXPLORE toward the first TSP frontier",
+//!   [`SupervisorCommand::ExploreNewRegion`]). Completing a relocation asks
+//!   for exploration from the new region; without a dwell, an `S_r` that
+//!   still holds the objects of the region just left (its radius is 10 m)
+//!   would send the robot straight back out. The default, 0, is the exact
+//!   listing.
 
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
@@ -37,6 +45,10 @@ pub struct SupervisorConfig {
     pub interval_s: f64,
     /// Number of clusters `K` passed to the policy (step 5).
     pub top_k: usize,
+    /// After a relocation mission ends, the region it reached is explored
+    /// for this long (seconds) before the policy is asked again (0: the
+    /// exact listing; the `sornav` agent uses 20 s).
+    pub region_dwell_s: f64,
 }
 
 impl Default for SupervisorConfig {
@@ -44,6 +56,7 @@ impl Default for SupervisorConfig {
         Self {
             interval_s: 1.0,
             top_k: 10,
+            region_dwell_s: 0.0,
         }
     }
 }
@@ -117,6 +130,9 @@ pub enum AlgorithmStep {
     RateLimited,
     /// Steps 5-7.
     PolicyEvaluated,
+    /// Steps 5-7 replaced by exploration of the region a relocation reached
+    /// ([`SupervisorConfig::region_dwell_s`]).
+    RegionDwell,
 }
 
 /// The supervisor's command to the executor.
@@ -140,6 +156,15 @@ pub enum SupervisorCommand {
         waypoint: Point3<f64>,
         /// The policy's reason.
         reason: String,
+    },
+    /// EXPLORE toward the first frontier of the TSP route, without asking
+    /// the policy: a relocation just ended and its region is being explored
+    /// ([`SupervisorConfig::region_dwell_s`]).
+    ExploreNewRegion {
+        /// The first TSP frontier.
+        frontier: Option<Point3<f64>>,
+        /// Seconds until the policy is asked again.
+        remaining_s: f64,
     },
     /// EXPLORE toward the first frontier of the TSP route (`None` when no
     /// frontier is left).
@@ -175,6 +200,11 @@ pub struct Supervisor<P, T> {
     config: SupervisorConfig,
     start: Option<T>,
     last_evaluation: Option<T>,
+    /// Kind of the mission at the previous step (relocation end detection).
+    previous_kind: Option<MissionKind>,
+    /// Elapsed time (s) until which the region reached by the last
+    /// relocation is explored without asking the policy.
+    dwell_until_s: Option<f64>,
     stats: SupervisorStats,
 }
 
@@ -185,7 +215,10 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
     /// [`SupervisorError::InvalidConfig`] for a negative or non-finite
     /// interval or `top_k == 0`.
     pub fn new(policy: P, config: SupervisorConfig) -> Result<Self, SupervisorError> {
-        if !(config.interval_s.is_finite() && config.interval_s >= 0.0) || config.top_k == 0 {
+        if !(config.interval_s.is_finite() && config.interval_s >= 0.0)
+            || config.top_k == 0
+            || !(config.region_dwell_s.is_finite() && config.region_dwell_s >= 0.0)
+        {
             return Err(SupervisorError::InvalidConfig(format!("{config:?}")));
         }
         Ok(Self {
@@ -193,6 +226,8 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
             config,
             start: None,
             last_evaluation: None,
+            previous_kind: None,
+            dwell_until_s: None,
             stats: SupervisorStats::default(),
         })
     }
@@ -216,6 +251,8 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
     pub fn reset(&mut self) {
         self.start = None;
         self.last_evaluation = None;
+        self.previous_kind = None;
+        self.dwell_until_s = None;
     }
 
     /// One pass of Algorithm 1 at time `now`; `region` builds step 5's inputs
@@ -242,6 +279,11 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
             });
         }
         self.stats.steps += 1;
+        // A relocation that ended starts the exploration of its region.
+        let previous = self.previous_kind.replace(input.mission.kind);
+        if previous == Some(MissionKind::Relocate) && input.mission.kind != MissionKind::Relocate {
+            self.dwell_until_s = Some(elapsed_s + self.config.region_dwell_s);
+        }
         // Step 2: reliable target evidence pre-empts everything.
         if let Some(target_id) = input.target_accepted {
             debug!(target: "sornav_supervisor", step = ?AlgorithmStep::TargetAccepted, target_id, "NAV_TO_OBJECT");
@@ -260,6 +302,15 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
             return Ok(SupervisorCommand::ContinueMission);
         }
         self.last_evaluation = Some(now);
+        if let Some(until) = self.dwell_until_s
+            && elapsed_s < until
+        {
+            debug!(target: "sornav_supervisor", step = ?AlgorithmStep::RegionDwell, remaining_s = until - elapsed_s, "explore the new region");
+            return Ok(SupervisorCommand::ExploreNewRegion {
+                frontier: input.first_frontier,
+                remaining_s: until - elapsed_s,
+            });
+        }
         // Step 5: top-K clusters by U_geo and the snapshot.
         let RegionContext {
             local_context,

@@ -107,18 +107,24 @@ proptest! {
     #![proptest_config(ProptestConfig::with_cases(200))]
 
     #[test]
-    fn ordering_matches_the_listing(events in prop::collection::vec(arb_event(), 1..40)) {
+    fn ordering_matches_the_listing(events in prop::collection::vec(arb_event(), 1..40), dwell in prop::sample::select(vec![0.0, 0.7, 3.0])) {
         let next = Rc::new(Cell::new(Choice::Explore));
         let seen = Rc::new(std::cell::RefCell::new(Vec::new()));
         let policy = Scripted { next: Rc::clone(&next), seen: Rc::clone(&seen) };
         let mut sup: Supervisor<_, f64> =
-            Supervisor::new(policy, SupervisorConfig { interval_s: INTERVAL, top_k: K }).unwrap();
+            Supervisor::new(policy, SupervisorConfig { interval_s: INTERVAL, top_k: K, region_dwell_s: dwell }).unwrap();
         let frontier = Some(Point3::new(9.0, 9.0, 0.0));
         let mut t = 0.0;
         let mut last_eval: Option<f64> = None;
         let mut calls = 0;
+        let mut previous: Option<MissionKind> = None;
+        let mut dwell_until: Option<f64> = None;
         for e in &events {
             t += e.dt;
+            if previous == Some(MissionKind::Relocate) && e.kind != MissionKind::Relocate {
+                dwell_until = Some(t + dwell);
+            }
+            previous = Some(e.kind);
             next.set(e.choice);
             let built = Cell::new(false);
             let input = StepInput {
@@ -144,6 +150,12 @@ proptest! {
             } else if e.kind != MissionKind::Idle && last_eval.is_some_and(|l| t - l < INTERVAL) {
                 prop_assert_eq!(&got, &SupervisorCommand::ContinueMission);
                 expected_kind = "continue";
+            } else if dwell_until.is_some_and(|u| t < u) {
+                last_eval = Some(t);
+                let is_expected = matches!(&got, SupervisorCommand::ExploreNewRegion { frontier: f, remaining_s }
+                    if *f == frontier && *remaining_s > 0.0 && *remaining_s <= dwell + 1e-9);
+                prop_assert!(is_expected, "{:?}", got);
+                expected_kind = "dwell";
             } else {
                 last_eval = Some(t);
                 calls += 1;
@@ -231,10 +243,91 @@ fn works_on_duration_and_instant_clocks_and_rejects_nan_time() {
             sornav_supervisor::NeverRelocate,
             SupervisorConfig {
                 interval_s: f64::NAN,
-                top_k: 10
+                ..SupervisorConfig::default()
             }
         )
         .is_err()
+    );
+    for dwell in [-1.0, f64::NAN, f64::INFINITY] {
+        let config = SupervisorConfig {
+            region_dwell_s: dwell,
+            ..SupervisorConfig::default()
+        };
+        assert!(Supervisor::<_, f64>::new(sornav_supervisor::NeverRelocate, config).is_err());
+    }
+}
+
+/// After a relocation ends, the policy is not asked for `region_dwell_s`:
+/// the new region is explored first; then the policy runs again.
+#[test]
+fn the_region_reached_by_a_relocation_is_explored_first() {
+    let next = Rc::new(Cell::new(Choice::Index(0)));
+    let seen = Rc::new(std::cell::RefCell::new(Vec::new()));
+    let policy = Scripted {
+        next: Rc::clone(&next),
+        seen: Rc::clone(&seen),
+    };
+    let config = SupervisorConfig {
+        region_dwell_s: 5.0,
+        ..SupervisorConfig::default()
+    };
+    let mut sup: Supervisor<_, f64> = Supervisor::new(policy, config).unwrap();
+    let frontier = Some(Point3::new(1.0, 2.0, 0.0));
+    let step = |sup: &mut Supervisor<_, f64>, t: f64, kind: MissionKind| {
+        let input = StepInput {
+            target: "toilet",
+            target_accepted: None,
+            mission: MissionState { id: 1, kind },
+            first_frontier: frontier,
+        };
+        sup.step(t, &input, || RegionContext {
+            local_context: vec![],
+            clusters: clusters(&[1.0, 2.0]),
+        })
+        .unwrap()
+    };
+    assert!(matches!(
+        step(&mut sup, 0.0, MissionKind::Idle),
+        SupervisorCommand::Relocate { .. }
+    ));
+    assert_eq!(
+        step(&mut sup, 3.0, MissionKind::Relocate),
+        SupervisorCommand::KeepRelocation
+    );
+    // The relocation ended at t = 10: explore the new region until t = 15.
+    for t in [10.0, 12.0, 14.9] {
+        assert_eq!(
+            step(&mut sup, t, MissionKind::Idle),
+            SupervisorCommand::ExploreNewRegion {
+                frontier,
+                remaining_s: 15.0 - t
+            }
+        );
+    }
+    let calls = seen.borrow().len();
+    assert!(matches!(
+        step(&mut sup, 15.0, MissionKind::Idle),
+        SupervisorCommand::Relocate { .. }
+    ));
+    assert_eq!(
+        seen.borrow().len(),
+        calls + 1,
+        "the policy runs again after the dwell"
+    );
+    // Target evidence still pre-empts the dwell.
+    step(&mut sup, 16.0, MissionKind::Relocate);
+    let input = StepInput {
+        target: "toilet",
+        target_accepted: Some(7),
+        mission: MissionState {
+            id: 2,
+            kind: MissionKind::Explore,
+        },
+        first_frontier: frontier,
+    };
+    assert_eq!(
+        sup.step(17.0, &input, RegionContext::default).unwrap(),
+        SupervisorCommand::NavToObject { target_id: 7 }
     );
 }
 

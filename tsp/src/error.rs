@@ -37,6 +37,20 @@ pub enum TspError {
         /// The offending value.
         value: f64,
     },
+    /// A finite entry is larger in magnitude than
+    /// [`MAX_ABS_COST`](crate::MAX_ABS_COST) (route sums could overflow).
+    #[error(
+        "cost[{row}][{col}] = {value} exceeds the accepted magnitude {}",
+        crate::MAX_ABS_COST
+    )]
+    CostOutOfRange {
+        /// Row (source node).
+        row: usize,
+        /// Column (target node).
+        col: usize,
+        /// The offending value.
+        value: f64,
+    },
     /// A node index is outside `0..n`.
     #[error("node {node} is out of range for a matrix of {n} nodes")]
     NodeOutOfRange {

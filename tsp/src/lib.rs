@@ -52,6 +52,11 @@
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
 
+/// The README's example is compiled and run as a doctest.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;
+
 mod construct;
 mod error;
 mod held_karp;
@@ -64,5 +69,5 @@ pub mod tsplib;
 pub use error::TspError;
 pub use held_karp::HELD_KARP_MAX_NODES;
 pub use horizon::{HorizonFrontier, HorizonPlan, HorizonProblem, RecedingHorizon, ReplacementRule};
-pub use matrix::CostMatrix;
+pub use matrix::{CostMatrix, MAX_ABS_COST};
 pub use solver::{Method, Solver, SolverConfig, Tour, held_karp, nearest_neighbour_route};

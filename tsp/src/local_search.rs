@@ -11,21 +11,28 @@
 //! * **2-opt**: remove `(a, b)`, `(d, e)`, add `(a, d)`, `(b, e)` and
 //!   reverse `b..d` (Croes 1958);
 //! * **Or-opt**: move a segment of 1-3 nodes elsewhere, optionally reversed
-//!   (Or 1976);
+//!   (Or 1976); on symmetric costs one scan per segment end covers both
+//!   orientations (a neighbour `w` of the end is tried on both of its
+//!   sides);
 //! * **or-3opt**: the orientation-preserving pure 3-opt move ("segment
 //!   exchange", `a -> b'..c -> a'..b -> c'`), which needs no reversal and is
 //!   the workhorse on strongly asymmetric instances.
 //!
-//! Perturbation: a random segment exchange of two short adjacent stretches
-//! (the double-bridge kick of Martin, Otto & Felten 1991, which keeps
-//! orientation), followed by local search from the six touched nodes only.
-//! A kicked tour replaces the current one when it is no worse (plateau
-//! moves are allowed), otherwise the move log is rolled back. After `m / 2`
-//! kicks without improving the current tour, five kicks are applied in a
-//! row and kept whatever they cost, to leave the basin (a restart close to
-//! the incumbent); the best tour ever seen is returned. Without this escape
-//! the search stalls for good on some asymmetric instances (kro124p: 1.9 %
-//! above the optimum with any kick budget; optimal with it).
+//! Perturbation: a random double bridge (Martin, Otto & Felten 1991): three
+//! adjacent stretches of at most 30 nodes are reordered `P Q R -> R Q P`,
+//! which replaces four arcs and keeps orientation, followed by local search
+//! from the eight touched nodes only. (An exchange of two stretches, three
+//! arcs, is itself an or-3opt move, and the local search undid it about
+//! 40 % of the time; with the double bridge, about 40 % fewer kicks reach
+//! the same quality on the FUEL instances, each costing about 1.4 times
+//! more.) A kicked tour replaces the current one when it is no worse
+//! (plateau moves are allowed), otherwise the move log is rolled back. After
+//! `m / 2` kicks without improving the current tour, five kicks are applied
+//! in a row and kept whatever they cost, to leave the basin (a restart close
+//! to the incumbent); the best tour ever seen is returned. Without this
+//! escape the search stalled for good on some asymmetric instances
+//! (kro124p, measured with the earlier two-stretch kick: 1.9 % above the
+//! optimum with any kick budget).
 //!
 //! Moves are applied in place on the array (the shorter side is rewritten)
 //! and logged, so rejecting a kick costs only what it changed.
@@ -43,6 +50,10 @@ pub(crate) struct IlsParams {
     pub kicks: usize,
     pub deadline: Option<Instant>,
     pub seed: u64,
+    /// Magnitude of the meaningful costs, when the matrix holds larger
+    /// artificial ones (the penalty of the symmetric form): moves must gain
+    /// more than `1e-9` of it. `None`: the largest entry.
+    pub cost_scale: Option<f64>,
 }
 
 /// Longest stretch moved by a kick.
@@ -56,6 +67,7 @@ const ESCAPE_KICKS: usize = 5;
 const MAX_COVER: usize = 4;
 
 /// How the cost change of reversing a stretch is priced.
+#[derive(Clone)]
 enum Asymmetry {
     /// Symmetric costs: reversal is free (and the shorter side is reversed).
     None,
@@ -67,12 +79,17 @@ enum Asymmetry {
     Prefix(Vec<f64>),
 }
 
+#[derive(Clone)]
 struct State<'a> {
     c: &'a [f64],
     m: usize,
     k: usize,
     out_c: Vec<u32>,
     in_c: Vec<u32>,
+    /// `c(i, out_c[i k + t])`, cached next to the lists.
+    out_cost: Vec<f64>,
+    /// `c(in_c[i k + t], i)`.
+    in_cost: Vec<f64>,
     tour: Vec<u32>,
     pos: Vec<u32>,
     asym: Asymmetry,
@@ -87,31 +104,41 @@ struct State<'a> {
 }
 
 impl<'a> State<'a> {
-    fn new(c: &'a [f64], m: usize, candidates: usize, initial: &[usize]) -> Self {
+    fn new(
+        c: &'a [f64],
+        m: usize,
+        candidates: usize,
+        initial: &[usize],
+        cost_scale: Option<f64>,
+    ) -> Self {
         let k = candidates.clamp(1, m - 1);
+        let (asym, in_cover) = asymmetry_cover(c, m);
+        // On symmetric costs the predecessor lists equal the successor lists.
+        let directions: &[bool] = if matches!(asym, Asymmetry::None) {
+            &[true]
+        } else {
+            &[true, false]
+        };
         let mut out_c = Vec::with_capacity(m * k);
         let mut in_c = Vec::with_capacity(m * k);
-        let mut idx: Vec<u32> = Vec::with_capacity(m);
+        let mut idx: Vec<(f64, u32)> = Vec::with_capacity(m);
         let mut max_abs = 1.0_f64;
+        let cmp = |x: &(f64, u32), y: &(f64, u32)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
         for i in 0..m {
             // The k cheapest successors, then the k cheapest predecessors
             // (ties by index), each by selection then a sort of k entries.
-            for (list, out) in [(&mut out_c, true), (&mut in_c, false)] {
-                let key = |j: u32| {
-                    if out {
-                        c[i * m + j as usize]
-                    } else {
-                        c[j as usize * m + i]
-                    }
-                };
+            for &out in directions {
+                let list = if out { &mut out_c } else { &mut in_c };
                 idx.clear();
-                idx.extend((0..m as u32).filter(|&j| j as usize != i));
-                let cmp = |x: &u32, y: &u32| key(*x).total_cmp(&key(*y)).then(x.cmp(y));
+                idx.extend((0..m).filter(|&j| j != i).map(|j| {
+                    let v = if out { c[i * m + j] } else { c[j * m + i] };
+                    (v, j as u32)
+                }));
                 if k < idx.len() {
                     idx.select_nth_unstable_by(k - 1, cmp);
                 }
                 idx[..k].sort_unstable_by(cmp);
-                list.extend_from_slice(&idx[..k]);
+                list.extend(idx[..k].iter().map(|e| e.1));
             }
             for j in 0..m {
                 if j != i {
@@ -119,13 +146,23 @@ impl<'a> State<'a> {
                 }
             }
         }
-        let (asym, in_cover) = asymmetry_cover(c, m);
+        if directions.len() == 1 {
+            in_c.clone_from(&out_c);
+        }
+        let out_cost = (0..m * k)
+            .map(|t| c[(t / k) * m + out_c[t] as usize])
+            .collect();
+        let in_cost = (0..m * k)
+            .map(|t| c[in_c[t] as usize * m + t / k])
+            .collect();
         let mut st = Self {
             c,
             m,
             k,
             out_c,
             in_c,
+            out_cost,
+            in_cost,
             tour: initial.iter().map(|&v| v as u32).collect(),
             pos: vec![0; m],
             asym,
@@ -135,7 +172,7 @@ impl<'a> State<'a> {
             queue: VecDeque::with_capacity(m),
             queued: vec![false; m],
             scratch: Vec::with_capacity(m),
-            eps: 1e-9 * max_abs,
+            eps: 1e-9 * cost_scale.map_or(max_abs, |s| s.max(1.0)),
         };
         for (p, &v) in st.tour.iter().enumerate() {
             st.pos[v as usize] = p as u32;
@@ -325,13 +362,18 @@ impl<'a> State<'a> {
             let cab = self.cost(a, b);
             let pb = self.p(b);
             let anchor = if as_tail { a } else { b };
-            for idx in 0..k {
-                let y = self.out_c[anchor as usize * k + idx];
-                let gain1 = cab - self.cost(anchor, y);
+            let base = anchor as usize * k;
+            let mut found = None;
+            let lists = self.out_cost[base..base + k]
+                .iter()
+                .zip(&self.out_c[base..base + k]);
+            for (&cy, &y) in lists {
+                let gain1 = cab - cy;
                 if gain1 <= eps {
                     break;
                 }
-                // New arcs (a, d) and (b, e) with e = succ(d).
+                // New arcs (a, d) and (b, e) with e = succ(d); the anchor's
+                // one costs `cy`.
                 let (d, e) = if as_tail {
                     (y, self.succ(y))
                 } else {
@@ -341,18 +383,26 @@ impl<'a> State<'a> {
                     continue;
                 }
                 let pd = self.p(d);
-                let delta = self.cost(a, d) + self.cost(b, e) - cab - self.cost(d, e)
-                    + self.reversal_delta(pb, pd);
+                let (cad, cbe) = if as_tail {
+                    (cy, self.cost(b, e))
+                } else {
+                    (self.cost(a, d), cy)
+                };
+                let delta = cad + cbe - cab - self.cost(d, e) + self.reversal_delta(pb, pd);
                 if delta < -eps {
-                    let inner = self.span(pb, pd);
-                    if matches!(self.asym, Asymmetry::None) && 2 * inner > self.m {
-                        self.reverse(self.p(e), self.p(a));
-                    } else {
-                        self.reverse(pb, pd);
-                    }
-                    self.finish_move(delta, &[a, b, d, e]);
-                    return true;
+                    found = Some((delta, d, e, pd));
+                    break;
                 }
+            }
+            if let Some((delta, d, e, pd)) = found {
+                let inner = self.span(pb, pd);
+                if matches!(self.asym, Asymmetry::None) && 2 * inner > self.m {
+                    self.reverse(self.p(e), self.p(a));
+                } else {
+                    self.reverse(pb, pd);
+                }
+                self.finish_move(delta, &[a, b, d, e]);
+                return true;
             }
         }
         false
@@ -362,6 +412,7 @@ impl<'a> State<'a> {
     /// between two adjacent nodes `u -> v`, forward or reversed.
     fn try_or_opt(&mut self, x: u32) -> bool {
         let (m, k, eps) = (self.m, self.k, self.eps);
+        let px = self.p(x);
         for len in 1..=3usize {
             if len + 3 > m {
                 break;
@@ -371,15 +422,25 @@ impl<'a> State<'a> {
                     continue;
                 }
                 let ps = if starts_at_x {
-                    self.p(x)
+                    px
                 } else {
-                    self.wrap(self.p(x) + m - (len - 1))
+                    self.wrap(px + m - (len - 1))
                 };
                 let pe = self.wrap(ps + len - 1);
                 let (s1, sl) = (self.tour[ps], self.tour[pe]);
                 let (p, nx) = (self.at(ps + m - 1), self.at(pe + 1));
                 let gain = self.cost(p, s1) + self.cost(sl, nx) - self.cost(p, nx);
                 if gain <= eps {
+                    continue;
+                }
+                // Cheapest first arcs of the four scans below (lists are
+                // sorted): when none is below the gain, no scan can succeed.
+                let (s1u, slu) = (s1 as usize * k, sl as usize * k);
+                let mut first_min = self.in_cost[s1u].min(self.out_cost[slu]);
+                if len > 1 {
+                    first_min = first_min.min(self.in_cost[slu]).min(self.out_cost[s1u]);
+                }
+                if first_min >= gain {
                     continue;
                 }
                 let in_seg = |st: &Self, y: u32| st.wrap(st.p(y) + m - ps) < len;
@@ -396,17 +457,23 @@ impl<'a> State<'a> {
                     let (head, tail) = if reversed { (sl, s1) } else { (s1, sl) };
                     let extra = if reversed { internal } else { 0.0 };
                     for via_head in [true, false] {
-                        for idx in 0..k {
-                            let (u, v, first) = if via_head {
-                                let u = self.in_c[head as usize * k + idx];
-                                (u, self.succ(u), self.cost(u, head))
+                        let base = if via_head { head } else { tail } as usize * k;
+                        for idx in base..base + k {
+                            let first = if via_head {
+                                self.in_cost[idx]
                             } else {
-                                let v = self.out_c[tail as usize * k + idx];
-                                (self.pred(v), v, self.cost(tail, v))
+                                self.out_cost[idx]
                             };
                             if first >= gain {
                                 break;
                             }
+                            let (u, v) = if via_head {
+                                let u = self.in_c[idx];
+                                (u, self.succ(u))
+                            } else {
+                                let v = self.out_c[idx];
+                                (self.pred(v), v)
+                            };
                             if u == p || in_seg(self, u) || in_seg(self, v) {
                                 continue;
                             }
@@ -432,6 +499,85 @@ impl<'a> State<'a> {
         false
     }
 
+    /// Or-opt on symmetric costs: as [`State::try_or_opt`], but each
+    /// neighbour `w` of a segment end `e` is tried on both sides (`e` next to
+    /// `w`, the segment between `w` and its successor or its predecessor),
+    /// which covers both orientations in one scan.
+    fn try_or_opt_sym(&mut self, x: u32) -> bool {
+        let (m, k, eps) = (self.m, self.k, self.eps);
+        let px = self.p(x);
+        for len in 1..=3usize {
+            if len + 3 > m {
+                break;
+            }
+            for starts_at_x in [true, false] {
+                if len == 1 && !starts_at_x {
+                    continue;
+                }
+                let ps = if starts_at_x {
+                    px
+                } else {
+                    self.wrap(px + m - (len - 1))
+                };
+                let pe = self.wrap(ps + len - 1);
+                let (s1, sl) = (self.at(ps), self.at(pe));
+                let (p, nx) = (self.at(ps + m - 1), self.at(pe + 1));
+                let gain = self.cost(p, s1) + self.cost(sl, nx) - self.cost(p, nx);
+                if gain <= eps {
+                    continue;
+                }
+                let in_seg = |st: &Self, y: u32| st.wrap(st.p(y) + m - ps) < len;
+                let mut found = None;
+                'ends: for (e, other) in [(s1, sl), (sl, s1)] {
+                    let base = e as usize * k;
+                    let lists = self.out_cost[base..base + k]
+                        .iter()
+                        .zip(&self.out_c[base..base + k]);
+                    for (&cew, &w) in lists {
+                        if cew >= gain {
+                            break;
+                        }
+                        if in_seg(self, w) {
+                            continue;
+                        }
+                        // Between w and its successor, then its predecessor.
+                        for after in [true, false] {
+                            let z = if after { self.succ(w) } else { self.pred(w) };
+                            if in_seg(self, z) {
+                                continue;
+                            }
+                            let delta = cew + self.cost(other, z) - self.cost(w, z) - gain;
+                            if delta < -eps {
+                                // (u, v) = the arc the segment goes into;
+                                // inserted as u -> head .. tail -> v.
+                                found = Some(if after {
+                                    (delta, w, z, e)
+                                } else {
+                                    (delta, z, w, other)
+                                });
+                                break 'ends;
+                            }
+                        }
+                    }
+                    if len == 1 {
+                        break;
+                    }
+                }
+                if let Some((delta, u, v, head)) = found {
+                    let l1 = self.span(self.p(nx), self.p(u));
+                    self.exchange(ps, len, l1);
+                    if head != s1 {
+                        let q = self.p(s1);
+                        self.reverse(q, self.wrap(q + len - 1));
+                    }
+                    self.finish_move(delta, &[p, nx, u, v, s1, sl]);
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
     /// or-3opt (segment exchange) with `x` as the tail `a` of the first
     /// removed arc: `a -> b'..c -> a'..b -> c'`.
     fn try_or3(&mut self, x: u32) -> bool {
@@ -439,9 +585,12 @@ impl<'a> State<'a> {
         let a = x;
         let a1 = self.succ(a);
         let caa1 = self.cost(a, a1);
-        for i in 0..k {
-            let b1 = self.out_c[a as usize * k + i];
-            let cab1 = self.cost(a, b1);
+        let (ba, ba1) = (a as usize * k, a1 as usize * k);
+        let outs = self.out_cost[ba..ba + k]
+            .iter()
+            .zip(&self.out_c[ba..ba + k]);
+        let mut found = None;
+        'outer: for (&cab1, &b1) in outs {
             if cab1 >= caa1 - eps {
                 break;
             }
@@ -451,9 +600,10 @@ impl<'a> State<'a> {
             let rb1 = self.rel(a, b1);
             let b = self.pred(b1);
             let g1 = caa1 - cab1 + self.cost(b, b1);
-            for j in 0..k {
-                let c = self.in_c[a1 as usize * k + j];
-                let cca1 = self.cost(c, a1);
+            let ins = self.in_cost[ba1..ba1 + k]
+                .iter()
+                .zip(&self.in_c[ba1..ba1 + k]);
+            for (&cca1, &c) in ins {
                 if cca1 >= g1 - eps {
                     break;
                 }
@@ -463,10 +613,14 @@ impl<'a> State<'a> {
                 let c1 = self.succ(c);
                 let delta = self.cost(b, c1) - self.cost(c, c1) - (g1 - cca1);
                 if delta < -eps {
-                    self.segment_exchange(a, b, c, delta);
-                    return true;
+                    found = Some((b, c, delta));
+                    break 'outer;
                 }
             }
+        }
+        if let Some((b, c, delta)) = found {
+            self.segment_exchange(a, b, c, delta);
+            return true;
         }
         false
     }
@@ -484,32 +638,56 @@ impl<'a> State<'a> {
     fn local_search(&mut self) {
         while let Some(x) = self.queue.pop_front() {
             self.queued[x as usize] = false;
-            if self.try_two_opt(x) || self.try_or_opt(x) || self.try_or3(x) {
+            let symmetric = matches!(self.asym, Asymmetry::None);
+            let or_opt = |st: &mut Self| {
+                if symmetric {
+                    st.try_or_opt_sym(x)
+                } else {
+                    st.try_or_opt(x)
+                }
+            };
+            if self.try_two_opt(x) || or_opt(self) || self.try_or3(x) {
                 self.push(x);
             }
         }
     }
 
-    /// Random double-bridge kick: exchange of two adjacent stretches of
-    /// `1..=KICK_MAX_SEGMENT` nodes at a random place (orientation is kept,
-    /// which matters on asymmetric costs).
+    /// Random double-bridge kick (Martin, Otto & Felten 1991): after a
+    /// random node `a`, three adjacent stretches `P Q R` of
+    /// `1..=KICK_MAX_SEGMENT` nodes each are put in the order `R Q P`, so
+    /// that the four arcs `a -> P`, `P -> Q`, `Q -> R` and `R -> rest` are
+    /// replaced. Orientation is kept (which matters on asymmetric costs),
+    /// and no single move of the local search undoes it (a three-arc
+    /// segment exchange would be undone by one or-3opt move).
     fn kick(&mut self, rng: &mut ChaCha8Rng) {
         let m = self.m;
-        let lmax = ((m - 1) / 2).clamp(1, KICK_MAX_SEGMENT);
+        let lmax = ((m - 1) / 3).clamp(1, KICK_MAX_SEGMENT);
         let p0 = rng.random_range(0..m);
         let l1 = rng.random_range(1..=lmax);
         let l2 = rng.random_range(1..=lmax);
-        let (a, b, c) = (self.tour[p0], self.at(p0 + l1), self.at(p0 + l1 + l2));
-        self.kick_at(a, b, c);
+        let l3 = rng.random_range(1..=lmax);
+        // l1 + l2 + l3 < m: every stretch and the rest (from d1 to a) are
+        // non-empty.
+        let (a, b) = (self.at(p0), self.at(p0 + l1));
+        let (c, d) = (self.at(p0 + l1 + l2), self.at(p0 + l1 + l2 + l3));
+        self.double_bridge(a, b, c, d);
     }
 
-    fn kick_at(&mut self, a: u32, b: u32, c: u32) {
-        let (a1, b1, c1) = (self.succ(a), self.succ(b), self.succ(c));
-        let delta = self.cost(a, b1) + self.cost(c, a1) + self.cost(b, c1)
+    /// Double bridge on the stretches `P = a1..b`, `Q = b1..c`, `R = c1..d`
+    /// (`a`, `b`, `c`, `d` distinct and in tour order): the tour becomes
+    /// `a -> R -> Q -> P -> d1`.
+    fn double_bridge(&mut self, a: u32, b: u32, c: u32, d: u32) {
+        let (a1, b1, c1, d1) = (self.succ(a), self.succ(b), self.succ(c), self.succ(d));
+        let delta = self.cost(a, c1) + self.cost(d, b1) + self.cost(c, a1) + self.cost(b, d1)
             - self.cost(a, a1)
             - self.cost(b, b1)
-            - self.cost(c, c1);
-        self.segment_exchange(a, b, c, delta);
+            - self.cost(c, c1)
+            - self.cost(d, d1);
+        let (l1, l2, l3) = (self.rel(a, b), self.rel(b, c), self.rel(c, d));
+        // P (Q R) -> (Q R) P, then Q R -> R Q.
+        self.exchange(self.p(a1), l1, l2 + l3);
+        self.exchange(self.p(b1), l2, l3);
+        self.finish_move(delta, &[a, a1, b, b1, c, c1, d, d1]);
     }
 
     /// Restores the tour as it was at the last `undo.clear()`.
@@ -526,6 +704,9 @@ impl<'a> State<'a> {
 /// most [`MAX_COVER`] nodes exists (greedy), else prepares prefix sums.
 fn asymmetry_cover(c: &[f64], m: usize) -> (Asymmetry, Vec<bool>) {
     let mut in_cover = vec![false; m];
+    if (0..m).all(|i| (0..i).all(|j| c[i * m + j] == c[j * m + i])) {
+        return (Asymmetry::None, in_cover);
+    }
     let asym = |i: usize, j: usize| c[i * m + j] != c[j * m + i];
     let mut cover = Vec::new();
     loop {
@@ -571,7 +752,7 @@ pub(crate) fn iterated_local_search(
     params: IlsParams,
 ) -> Vec<usize> {
     debug_assert!(m >= 4 && initial.len() == m);
-    let mut st = State::new(c, m, params.candidates, initial);
+    let mut st = State::new(c, m, params.candidates, initial, params.cost_scale);
     for v in 0..m as u32 {
         st.push(v);
     }
@@ -659,11 +840,100 @@ mod tests {
         out
     }
 
+    /// The double bridge against a reference built by slicing the tour.
+    #[test]
+    fn double_bridge_matches_the_reference() {
+        for (m, c) in instances() {
+            let init: Vec<usize> = (0..m).rev().collect();
+            let mut st = State::new(&c, m, 8, &init, None);
+            let mut rng = ChaCha8Rng::seed_from_u64(m as u64);
+            for _ in 0..30 {
+                // Four distinct positions p0 < p1 < p2 < p3 after a rotation.
+                let p0 = rng.random_range(0..m);
+                let mut cuts: Vec<usize> = (1..m).collect();
+                for i in 0..3 {
+                    let j = rng.random_range(i..cuts.len());
+                    cuts.swap(i, j);
+                }
+                let mut cuts = cuts[..3].to_vec();
+                cuts.sort_unstable();
+                let before: Vec<u32> = (0..m).map(|t| st.at(p0 + t)).collect();
+                let (a, b, c3, d) = (before[0], before[cuts[0]], before[cuts[1]], before[cuts[2]]);
+                // a P Q R rest -> a R Q P rest.
+                let mut expected = vec![a];
+                expected.extend_from_slice(&before[cuts[1] + 1..=cuts[2]]);
+                expected.extend_from_slice(&before[cuts[0] + 1..=cuts[1]]);
+                expected.extend_from_slice(&before[1..=cuts[0]]);
+                expected.extend_from_slice(&before[cuts[2] + 1..]);
+                let cost = st.cost;
+                st.undo.clear();
+                st.double_bridge(a, b, c3, d);
+                let pa = st.p(a);
+                let after: Vec<u32> = (0..m).map(|t| st.at(pa + t)).collect();
+                assert_eq!(after, expected);
+                assert!((st.cost - st.recomputed_cost()).abs() < 1e-6);
+                st.rollback();
+                st.cost = cost;
+                let back: Vec<u32> = (0..m).map(|t| st.at(st.p(before[0]) + t)).collect();
+                assert_eq!(back, before);
+                st.queue.clear();
+                st.queued.fill(false);
+            }
+        }
+    }
+
+    /// On symmetric costs the one-scan Or-opt has exactly the neighbourhood
+    /// of the general one: from every node of random tours, both find an
+    /// improving move or neither does (and the debug build checks every
+    /// applied move's tracked cost).
+    #[test]
+    fn symmetric_or_opt_matches_the_general_scan() {
+        let mut outcomes = [0usize; 2];
+        for (m, c) in instances() {
+            if (0..m).any(|i| (0..i).any(|j| c[i * m + j] != c[j * m + i])) {
+                continue;
+            }
+            let mut rng = ChaCha8Rng::seed_from_u64(5);
+            for k in [3, m - 1] {
+                for _ in 0..5 {
+                    let mut init: Vec<usize> = (0..m).collect();
+                    for i in (1..m).rev() {
+                        init.swap(i, rng.random_range(0..=i));
+                    }
+                    // A random tour, its local optimum, and that optimum kicked.
+                    let random = State::new(&c, m, k, &init, None);
+                    let mut optimum = random.clone();
+                    for v in 0..m as u32 {
+                        optimum.push(v);
+                    }
+                    optimum.local_search();
+                    let mut kicked = optimum.clone();
+                    kicked.kick(&mut rng);
+                    for mut st in [random, optimum, kicked] {
+                        st.queue.clear();
+                        st.queued.fill(false);
+                        for x in 0..m as u32 {
+                            let (mut g, mut s) = (st.clone(), st.clone());
+                            let found = g.try_or_opt(x);
+                            assert_eq!(s.try_or_opt_sym(x), found, "m {m} k {k} node {x}");
+                            outcomes[usize::from(found)] += 1;
+                            if found {
+                                assert!(s.cost < st.cost && g.cost < st.cost);
+                                assert!((s.cost - s.recomputed_cost()).abs() < 1e-6);
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        assert!(outcomes[0] > 20 && outcomes[1] > 20, "{outcomes:?}");
+    }
+
     #[test]
     fn tracked_cost_and_rollback_stay_exact() {
         for (m, c) in instances() {
             let init: Vec<usize> = (0..m).collect();
-            let mut st = State::new(&c, m, 8, &init);
+            let mut st = State::new(&c, m, 8, &init, None);
             for v in 0..m as u32 {
                 st.push(v);
             }

@@ -9,8 +9,11 @@ use crate::error::TspError;
 /// from node `i` to node `j`. Costs may be asymmetric; the diagonal is never
 /// read by the solvers.
 ///
-/// Construction validates that every entry is finite, so the solvers never
-/// see a NaN. Forbidden arcs are expressed with a large finite cost.
+/// Construction validates that every entry is finite and at most
+/// [`MAX_ABS_COST`] in magnitude, so the solvers never see a NaN and no
+/// route cost, DP entry or move delta can overflow to infinity. Forbidden
+/// arcs are expressed with a large finite cost (far below the bound, for
+/// example `1e9`).
 ///
 /// # Examples
 /// ```
@@ -51,13 +54,18 @@ impl From<CostMatrix> for RawMatrix {
     }
 }
 
+/// Largest accepted magnitude of a cost entry: sums of up to `10^8`
+/// entries (any route through a matrix that fits in memory) stay finite.
+pub const MAX_ABS_COST: f64 = 1.0e300;
+
 impl CostMatrix {
     /// A matrix from `n * n` row-major entries.
     ///
     /// # Errors
     /// [`TspError::Empty`] for `n == 0`, [`TspError::NotSquare`] when the
     /// length is not `n * n`, [`TspError::NonFinite`] for NaN or infinite
-    /// entries.
+    /// entries, [`TspError::CostOutOfRange`] for a finite entry of magnitude
+    /// above [`MAX_ABS_COST`].
     pub fn new(n: usize, data: Vec<f64>) -> Result<Self, TspError> {
         if n == 0 {
             return Err(TspError::Empty);
@@ -67,6 +75,13 @@ impl CostMatrix {
         }
         if let Some(k) = data.iter().position(|v| !v.is_finite()) {
             return Err(TspError::NonFinite {
+                row: k / n,
+                col: k % n,
+                value: data[k],
+            });
+        }
+        if let Some(k) = data.iter().position(|v| v.abs() > MAX_ABS_COST) {
+            return Err(TspError::CostOutOfRange {
                 row: k / n,
                 col: k % n,
                 value: data[k],

@@ -5,8 +5,8 @@ use approx::assert_relative_eq;
 use common::{Shape, brute_force, build, is_permutation, matrix};
 use proptest::prelude::*;
 use sornav_tsp::{
-    CostMatrix, HELD_KARP_MAX_NODES, Method, Solver, SolverConfig, TspError, held_karp,
-    nearest_neighbour_route,
+    CostMatrix, HELD_KARP_MAX_NODES, MAX_ABS_COST, Method, Solver, SolverConfig, TspError,
+    held_karp, nearest_neighbour_route,
 };
 
 /// A solver that never uses the exact DP (beyond 3 nodes).
@@ -146,6 +146,50 @@ fn tiny_and_degenerate_inputs() {
     // Equal costs everywhere: any permutation is optimal.
     let flat = CostMatrix::from_fn(40, |_, _| 1.0).unwrap();
     assert_eq!(solver.open_path(&flat, 5, None).unwrap().cost, 39.0);
+}
+
+#[test]
+fn costs_up_to_the_bound_never_overflow() {
+    // Beyond the bound: a typed error (sums of such entries overflow to
+    // infinity, and the exact DP then lost its parent chain and returned a
+    // non-permutation).
+    assert!(matches!(
+        CostMatrix::from_fn(3, |i, j| if i == j { 0.0 } else { f64::MAX / 5.0 }),
+        Err(TspError::CostOutOfRange { row: 0, col: 1, .. })
+    ));
+    assert!(matches!(
+        CostMatrix::new(2, vec![0.0, 1.0, -1.5 * MAX_ABS_COST, 0.0]),
+        Err(TspError::CostOutOfRange { row: 1, col: 0, .. })
+    ));
+    // At the bound (exact multiples of a power of two, so that the debug
+    // cost tracking of the local search sees no rounding): every solver
+    // returns a permutation with a finite cost.
+    let unit = 2f64.powi(994); // 1.7e299; 5 units < MAX_ABS_COST
+    assert!(5.0 * unit <= MAX_ABS_COST);
+    let solver = Solver::new(SolverConfig::default()).unwrap();
+    for n in [2, 3, 5, 9, 13, 20, 40] {
+        let m = CostMatrix::from_fn(n, |i, j| {
+            if i == j {
+                0.0
+            } else {
+                unit * ((i * 7 + j * 3) % 5 + 1) as f64
+            }
+        })
+        .unwrap();
+        let mut tours = vec![
+            solver.open_path(&m, 0, None).unwrap(),
+            solver.open_path(&m, 0, Some(n - 1)).unwrap(),
+            solver.closed_tour(&m, n - 1).unwrap(),
+            nearest_neighbour_route(&m, 0, None, false).unwrap(),
+        ];
+        if n <= HELD_KARP_MAX_NODES {
+            tours.push(held_karp(&m, 1 % n, None, true).unwrap());
+        }
+        for t in tours {
+            assert!(is_permutation(&t.order, n), "n = {n}: {:?}", t.order);
+            assert!(t.cost.is_finite(), "n = {n}: {}", t.cost);
+        }
+    }
 }
 
 #[test]

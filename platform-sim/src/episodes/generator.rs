@@ -2,7 +2,8 @@
 //!
 //! For each target category present in the scene:
 //! 1. **Goals** are all instances of the category.
-//! 2. **View points** of a goal are navigable poses within 1.0 m of the
+//! 2. **View points** of a goal are navigable poses on a floor island
+//!    ([`crate::NavMesh::is_floor_region`]: never on top of furniture) within 1.0 m of the
 //!    object's bounds (distance from the agent's body, a vertical segment from
 //!    the feet to camera height, to the box), sampled on a 0.1 m grid, from
 //!    which the object is visible at camera height: at least one of 27 sample
@@ -12,7 +13,8 @@
 //!    its `iou` is the fraction of sample rays that see the object. Goals
 //!    without view points are dropped, as in Habitat.
 //! 3. **Starts** are navigable poses drawn uniformly over the walkable area
-//!    (every span has the same area) whose geodesic distance to the nearest
+//!    of the floor islands (every span has the same area; islands on
+//!    furniture are excluded) whose geodesic distance to the nearest
 //!    view point lies in [1, 30] m. Episodes whose geodesic/euclidean ratio is
 //!    below 1.1 are kept only with probability 20 (r - 0.98)^2, habitat-lab's
 //!    filter against trivial straight-line episodes. The start heading is
@@ -169,7 +171,9 @@ pub fn goal_view_points(
             let (x, y) = (b.min.x - r + i as f64 * step, b.min.y - r + j as f64 * step);
             for h in nav.heights_at(x, y) {
                 let feet = Point3::new(x, y, h);
-                if body_distance(object, &feet, cam_h) > r || !nav.is_navigable(&feet) {
+                if body_distance(object, &feet, cam_h) > r
+                    || !nav.span_at(&feet).is_some_and(|s| nav.is_floor_span(s))
+                {
                     continue;
                 }
                 let eye = Point3::new(x, y, h + cam_h);
@@ -229,7 +233,11 @@ pub fn generate_episodes(
     let nav = sim.nav();
     let scene = sim.scene();
     let mut episodes = Vec::new();
-    if nav.span_count() == 0 {
+    // starts are drawn from the spans of floor islands (never on furniture)
+    let floor_spans: Vec<u32> = (0..nav.span_count() as u32)
+        .filter(|&s| nav.is_floor_span(s))
+        .collect();
+    if floor_spans.is_empty() {
         return Ok(episodes);
     }
     for category in &config.categories {
@@ -273,7 +281,7 @@ pub fn generate_episodes(
             && attempts < config.max_attempts * config.episodes_per_category
         {
             attempts += 1;
-            let s = rng.random_range(0..nav.span_count()) as u32;
+            let s = floor_spans[rng.random_range(0..floor_spans.len())];
             let start = nav.span_center(s);
             let d = field.span_distance(s);
             if !(d >= config.min_geodesic && d <= config.max_geodesic) {

@@ -216,6 +216,78 @@ pub const SHAPES: &[Shape] = &[
         placement: Placement::Mounted,
         max_per_room: 2,
     },
+    Shape {
+        category: "cushion",
+        width: (0.45, 0.6),
+        depth: (0.45, 0.6),
+        height: (0.25, 0.4),
+        placement: Placement::Wall,
+        max_per_room: 3,
+    },
+    Shape {
+        category: "lamp",
+        width: (0.3, 0.4),
+        depth: (0.3, 0.4),
+        height: (1.4, 1.7),
+        placement: Placement::Wall,
+        max_per_room: 3,
+    },
+    Shape {
+        category: "mirror",
+        width: (0.4, 0.8),
+        depth: (0.03, 0.05),
+        height: (0.6, 0.9),
+        placement: Placement::Mounted,
+        max_per_room: 2,
+    },
+    Shape {
+        category: "radiator",
+        width: (0.6, 1.2),
+        depth: (0.08, 0.12),
+        height: (0.5, 0.7),
+        placement: Placement::Wall,
+        max_per_room: 2,
+    },
+    Shape {
+        category: "toilet_paper",
+        width: (0.12, 0.15),
+        depth: (0.1, 0.12),
+        height: (0.12, 0.15),
+        placement: Placement::Mounted,
+        max_per_room: 2,
+    },
+    Shape {
+        category: "dishwasher",
+        width: (0.6, 0.6),
+        depth: (0.6, 0.6),
+        height: (0.85, 0.85),
+        placement: Placement::Wall,
+        max_per_room: 1,
+    },
+    Shape {
+        category: "piano",
+        width: (1.4, 1.55),
+        depth: (0.55, 0.65),
+        height: (1.1, 1.3),
+        placement: Placement::Wall,
+        max_per_room: 1,
+    },
+    Shape {
+        category: "gym_equipment",
+        width: (0.6, 0.8),
+        depth: (1.2, 1.8),
+        height: (0.5, 1.3),
+        placement: Placement::Free,
+        max_per_room: 2,
+    },
+    Shape {
+        category: "clothes",
+        width: (0.6, 1.0),
+        depth: (0.4, 0.5),
+        height: (1.3, 1.7),
+        placement: Placement::Wall,
+        max_per_room: 2,
+    },
 ];
 
 /// The shape of a category, if the generator can build it.
@@ -342,7 +414,7 @@ pub fn build(
                 p.boxed(-hw + 0.02, -hd, z0, hw - 0.02, -hd + 0.02, z1);
             }
         }
-        "counter" | "stove" | "washing_machine" => {
+        "counter" | "stove" | "washing_machine" | "dishwasher" => {
             p.boxed(-hw, -hd + 0.05, 0.0, hw, hd, 0.1);
             p.boxed(-hw, -hd + 0.02, 0.1, hw, hd, h - 0.04);
             p.boxed(-hw, -hd, h - 0.04, hw, hd, h);
@@ -372,6 +444,35 @@ pub fn build(
             p.boxed(-hw, -hd + 0.02, 0.08, hw, hd, h);
             p.boxed(-hw + 0.01, -hd, 0.1, -0.005, -hd + 0.02, h - 0.02);
             p.boxed(0.005, -hd, 0.1, hw - 0.01, -hd + 0.02, h - 0.02);
+        }
+        "lamp" => {
+            p.boxed(-hw, -hd, 0.0, hw, hd, 0.04);
+            p.boxed(-0.015, -0.015, 0.04, 0.015, 0.015, h - 0.3);
+            p.boxed(-hw, -hd, h - 0.3, hw, hd, h);
+        }
+        "radiator" => {
+            p.boxed(-hw, -hd, 0.1, hw, hd, h);
+            p.boxed(-hw + 0.03, -0.02, 0.0, -hw + 0.06, 0.02, 0.1);
+            p.boxed(hw - 0.06, -0.02, 0.0, hw - 0.03, 0.02, 0.1);
+        }
+        "piano" => {
+            p.boxed(-hw, hd - 0.3, 0.0, hw, hd, h);
+            p.boxed(-hw, -hd, 0.65, hw, hd - 0.3, 0.75);
+            p.boxed(-hw, -hd, 0.0, -hw + 0.05, hd - 0.3, 0.65);
+            p.boxed(hw - 0.05, -hd, 0.0, hw, hd - 0.3, 0.65);
+        }
+        "gym_equipment" => {
+            // a weight bench with an upright rack at one end
+            p.legs(w, d, 0.42, 0.03);
+            p.boxed(-hw, -hd, 0.42, hw, hd, 0.48);
+            p.boxed(-hw, hd - 0.08, 0.48, hw, hd, h.max(0.6));
+        }
+        "clothes" => {
+            // clothes hanging from a rail on two uprights
+            p.boxed(-hw, -0.02, 0.0, -hw + 0.03, 0.02, h);
+            p.boxed(hw - 0.03, -0.02, 0.0, hw, 0.02, h);
+            p.boxed(-hw, -0.015, h - 0.03, hw, 0.015, h);
+            p.boxed(-hw + 0.05, -hd, h * 0.35, hw - 0.05, hd, h - 0.05);
         }
         _ => p.boxed(-hw, -hd, 0.0, hw, hd, h),
     }

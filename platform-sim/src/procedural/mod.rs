@@ -1,29 +1,58 @@
 //! Procedural houses: the embedded default scene source, no data files needed.
 //!
-//! [`generate`] builds a seeded multi-room house with one or two floors:
+//! [`generate`] builds a seeded multi-room house with one or two floors that
+//! imitates one HM3D validation house (statistics in [`HouseStats`], derived
+//! from HM3D-Semantics v0.2 by the `derive_hm3d_stats` example):
 //!
-//! 1. **Size** — a house size (floors, rooms, navigable area) is drawn from the
-//!    HM3D validation scenes ([`HouseStats`]); the footprint area per floor is
-//!    the navigable area per floor scaled by 1.6 (furniture and walls take the
-//!    rest), clamped to 40-150 m^2.
-//! 2. **Layout** — two-floor houses reserve a stair block at one corner and a
-//!    landing strip beside it; the rest of each floor is split by binary space
-//!    partition into rooms no narrower than `min_room_side`.
-//! 3. **Room types** — essentials (living room, kitchen, bedroom, bathroom)
-//!    first, then types drawn in proportion to their HM3D frequency; larger
-//!    types take larger rooms.
+//! 1. **Size** — a house (floors, rooms, navigable area) is drawn uniformly
+//!    from HM3D's validation scenes ([`house_record`]). Houses of three or
+//!    more floors are built with two. The house gets that many rooms (a
+//!    two-floor house at least four), where the stairwell of a two-floor
+//!    house (the stair block [`STAIRWELL`] below and the landing
+//!    [`STAIRWELL_LANDING`] above) counts as one Hall/stairwell room, as
+//!    HM3D annotates a stairwell spanning floors as one region. The
+//!    footprint is the navigable area times [`FOOTPRINT_PER_NAVIGABLE`]
+//!    (walls, the agent-radius band along them and furniture take the rest),
+//!    at least [`MIN_ROOM_AREA`] per room, shared by the floors.
+//! 2. **Room types** — a house of R rooms expects `mean_t R / M` rooms of
+//!    type t (HM3D's mean per scene `mean_t`, `M` their sum; HM3D's stairs
+//!    regions count as hallways). Each type is present with HM3D's fraction
+//!    of scenes holding it (lowered for houses too small to expect one), and
+//!    the remaining rooms go to the types present in proportion to their
+//!    expected extra rooms (see `sample_room_types`). In two-floor houses
+//!    kitchens, living and dining rooms, garages, laundries and offices go
+//!    downstairs first, bedrooms upstairs.
+//! 3. **Layout** — two-floor houses reserve a stair block at one corner with
+//!    a landing beside its top; the rest of each floor is cut recursively
+//!    into one rectangle per room, areas in proportion to the room type
+//!    (a living room about three times a bathroom), no narrower than
+//!    `min_room_side`.
 //! 4. **Doors** — a random spanning tree of the room adjacency graph (plus
-//!    extra doors with probability 0.3) gets door openings, so every room is
-//!    reachable; walls are extruded with thickness and lintels over doors.
-//! 5. **Furniture** — for each room, each category is present with its HM3D
-//!    probability for that room type and count; pieces are composite boxes
-//!    ([`furniture`]) placed against walls or in the free area, keeping door
-//!    zones and a walking margin clear. A piece is kept only if, on a 0.1 m
-//!    grid inflated by 0.3 m, all doorways of the room stay in one free
-//!    component and every piece keeps a free cell of it within 0.9 m (so every
-//!    room is reachable and every object has a view point). With
-//!    `shuffled_semantics` the object list of each room comes from a random
-//!    room type instead.
+//!    extra doors with probability [`EXTRA_DOOR_PROBABILITY`]) gets door
+//!    openings, so every room is reachable; walls are extruded with
+//!    thickness and lintels over doors.
+//! 5. **Furniture** — each room (but the stairwell) draws its objects from
+//!    its type's statistics: every category the generator can build
+//!    ([`furniture::SHAPES`], 31 categories) is present with HM3D's
+//!    probability for that room type and has `1 + G` instances, G geometric
+//!    with mean `mean_count - 1`, at most the shape's `max_per_room`.
+//!    Pieces are composite boxes ([`furniture`]) placed against walls (side by
+//!    side, keeping [`WALL_FRONT_CLEARANCE`] in front), in the free area, at
+//!    tables (chairs, stools) or hung on walls at [`MOUNT_HEIGHT`], keeping
+//!    [`DOOR_CLEARANCE`] at doorways. A piece is kept only if, on a 0.1 m grid
+//!    where pieces are inflated by 0.3 m, all doorways of the room stay in one
+//!    free component and every piece keeps a free cell of it within 0.8 m (so
+//!    every room is reachable and every object has a view point). First
+//!    instances of every category are placed before second ones, large and
+//!    common pieces first; pieces that do not fit are dropped (about 5 % of
+//!    the category presences in the `procedural_stats` test houses). With
+//!    `shuffled_semantics` the rooms' object lists are drawn as usual and
+//!    then dealt to the rooms in random order: the house keeps its objects,
+//!    the room-object association is gone.
+//!
+//! The `procedural_stats` test checks the outcome against the statistics
+//! (floors, rooms and area per house, room-type frequencies, objects per
+//! room type, shuffled semantics).
 //!
 //! Same seed and configuration, same house.
 
@@ -62,7 +91,9 @@ pub struct ProceduralConfig {
     pub door_height: f64,
     /// Smallest room side (m).
     pub min_room_side: f64,
-    /// Most rooms per floor (the stair block and landing not counted).
+    /// Most rooms per floor (the stairwell not counted; a two-floor house
+    /// has at least two rooms downstairs and one upstairs). The default, 20,
+    /// leaves HM3D's room counts uncapped.
     pub max_rooms_per_floor: u32,
 }
 
@@ -77,7 +108,7 @@ impl Default for ProceduralConfig {
             door_width: 0.9,
             door_height: 2.1,
             min_room_side: 2.4,
-            max_rooms_per_floor: 7,
+            max_rooms_per_floor: 20,
         }
     }
 }
@@ -119,8 +150,8 @@ impl ProceduralConfig {
         if !(self.min_room_side.is_finite() && (1.8..=6.0).contains(&self.min_room_side)) {
             return bad("min_room_side", "must be in [1.8, 6]");
         }
-        if !(1..=20).contains(&self.max_rooms_per_floor) {
-            return bad("max_rooms_per_floor", "must be in [1, 20]");
+        if !(1..=40).contains(&self.max_rooms_per_floor) {
+            return bad("max_rooms_per_floor", "must be in [1, 40]");
         }
         Ok(())
     }
@@ -208,50 +239,264 @@ struct Opening {
     rooms: (usize, usize),
 }
 
-fn size_rank(t: RoomType) -> u32 {
+/// Relative floor area of a room type (a living room is about three times
+/// a bathroom).
+fn area_weight(t: RoomType) -> f64 {
     match t {
-        RoomType::LivingRoom => 0,
-        RoomType::Garage => 1,
-        RoomType::Bedroom => 2,
-        RoomType::Kitchen => 3,
-        RoomType::DiningRoom => 4,
-        RoomType::Office => 5,
-        RoomType::Other | RoomType::Storage | RoomType::Outdoor => 6,
-        RoomType::Laundry => 7,
-        RoomType::Hallway | RoomType::Stairs => 8,
-        RoomType::Bathroom => 9,
-        RoomType::Toilet | RoomType::Closet => 10,
+        RoomType::LivingRoom | RoomType::Garage => 2.0,
+        RoomType::Kitchen | RoomType::DiningRoom => 1.4,
+        RoomType::Bedroom => 1.3,
+        RoomType::Office | RoomType::Other | RoomType::Storage | RoomType::Outdoor => 1.0,
+        RoomType::Hallway | RoomType::Stairs => 0.8,
+        RoomType::Laundry | RoomType::Bathroom => 0.8,
+        RoomType::Toilet | RoomType::Closet => 0.5,
     }
 }
 
-fn split_bsp(rng: &mut ChaCha8Rng, area: Rect, n: usize, min_side: f64) -> Vec<Rect> {
-    let mut rects = vec![area];
-    while rects.len() < n {
-        // largest splittable rectangle
-        let mut order: Vec<usize> = (0..rects.len()).collect();
-        order.sort_by(|&a, &b| rects[b].area().total_cmp(&rects[a].area()));
-        let Some(&i) = order
-            .iter()
-            .find(|&&i| rects[i].w().max(rects[i].d()) >= 2.0 * min_side)
-        else {
-            break;
+/// Footprint (m^2) per m^2 of HM3D navigable area: walls, the agent-radius
+/// band along them and furniture take the rest (calibrated so that the
+/// walkable area of generated houses follows HM3D's navigable area, see the
+/// `procedural_stats` test).
+pub const FOOTPRINT_PER_NAVIGABLE: f64 = 1.95;
+
+/// Name of the stair block room of a two-floor house (ground floor).
+pub const STAIRWELL: &str = "stairwell";
+
+/// Name of the landing at the top of the stairs; with the stair block below
+/// it forms one Hall/stairwell room in the statistics.
+pub const STAIRWELL_LANDING: &str = "stairwell landing";
+
+/// Largest share of a room's footprint that floor-standing furniture may take.
+pub const MAX_FURNISHED_SHARE: f64 = 0.35;
+
+/// Draws the objects of one room of type `rs`: each category the generator
+/// can build is present with its HM3D probability (`presence`); a present
+/// category gets `1 + G` instances, G geometric with mean `mean_count - 1`
+/// (success probability capped at 0.9), at most the shape's `max_per_room`.
+fn draw_objects(rng: &mut ChaCha8Rng, rs: &RoomTypeStats) -> Vec<Drawn> {
+    let mut out = Vec::new();
+    for cs in &rs.objects {
+        let Some(sh) = shape(&cs.category) else {
+            continue;
         };
-        let r = rects[i];
-        let along_x = r.w() >= r.d();
-        let len = if along_x { r.w() } else { r.d() };
-        let lo = min_side / len;
-        let t = rng.random_range(lo.clamp(0.35, 0.5)..=(1.0 - lo).clamp(0.5, 0.65));
-        let (a, b) = if along_x {
-            let x = r.x0 + t * r.w();
-            (Rect { x1: x, ..r }, Rect { x0: x, ..r })
-        } else {
-            let y = r.y0 + t * r.d();
-            (Rect { y1: y, ..r }, Rect { y0: y, ..r })
-        };
-        rects[i] = a;
-        rects.push(b);
+        if rng.random::<f64>() >= cs.presence {
+            continue;
+        }
+        let mut count = 1u32;
+        let p_more = ((cs.mean_count - 1.0) / cs.mean_count).clamp(0.0, 0.9);
+        while count < sh.max_per_room && rng.random::<f64>() < p_more {
+            count += 1;
+        }
+        out.push(Drawn {
+            shape: sh,
+            count,
+            presence: cs.presence,
+        });
     }
-    rects
+    out
+}
+
+/// A category drawn for a room: its shape, number of instances and HM3D
+/// presence (the placement priority).
+#[derive(Debug, Clone, Copy)]
+struct Drawn {
+    shape: &'static furniture::Shape,
+    count: u32,
+    presence: f64,
+}
+
+/// Height above the floor of wall-mounted pieces (pictures, towels, mirrors).
+pub const MOUNT_HEIGHT: f64 = 1.2;
+
+/// Depth (m) of the floor kept clear on both sides of a doorway.
+pub const DOOR_CLEARANCE: f64 = 0.7;
+
+/// Probability of a door between adjacent rooms beyond the spanning tree.
+pub const EXTRA_DOOR_PROBABILITY: f64 = 0.15;
+
+/// Depth (m) of the floor kept clear in front of a piece standing against a
+/// wall (nothing else may stand there).
+pub const WALL_FRONT_CLEARANCE: f64 = 0.6;
+
+/// Smallest footprint (m^2) reserved per room when a house has many rooms
+/// for its area.
+pub const MIN_ROOM_AREA: f64 = 9.0;
+
+/// Floor preference of room types in two-floor houses (lower: ground floor).
+fn ground_rank(t: RoomType) -> u32 {
+    match t {
+        RoomType::Garage | RoomType::Outdoor => 0,
+        RoomType::Kitchen => 1,
+        RoomType::LivingRoom => 2,
+        RoomType::DiningRoom => 3,
+        RoomType::Laundry | RoomType::Storage => 4,
+        RoomType::Hallway | RoomType::Stairs => 5,
+        RoomType::Office | RoomType::Other => 6,
+        RoomType::Toilet | RoomType::Bathroom => 7,
+        RoomType::Closet => 8,
+        RoomType::Bedroom => 9,
+    }
+}
+
+/// Mean rooms per scene of each room type the generator builds, with HM3D's
+/// "stairs" regions merged into hallways (HM3D's Hall/stairwell class).
+fn type_means(stats: &HouseStats) -> Vec<(RoomType, f64, f64)> {
+    let stairs = stats
+        .room_type(RoomType::Stairs)
+        .map_or(0.0, |r| r.mean_per_scene);
+    stats
+        .room_types
+        .iter()
+        .filter(|r| r.room_type != RoomType::Stairs && r.mean_per_scene > 0.0)
+        .map(|r| {
+            let extra = if r.room_type == RoomType::Hallway {
+                stairs
+            } else {
+                0.0
+            };
+            (
+                r.room_type,
+                r.mean_per_scene + extra,
+                r.scene_presence.max(1e-6),
+            )
+        })
+        .collect()
+}
+
+/// Draws the types of `n` rooms of one house (the stairwell of a two-floor
+/// house not included) so that room-type frequencies and the fraction of
+/// houses holding a type follow HM3D:
+///
+/// * a house of `R` rooms expects `mean_t * R / M` rooms of type t, with
+///   `mean_t` the HM3D mean per scene and `M` their sum;
+/// * type t is present ("anchored") with probability
+///   `q_t = min(presence_t, mean_t * R / M)`, HM3D's fraction of scenes
+///   holding it, lowered for houses too small to expect one;
+/// * the remaining rooms go to anchored types, in proportion to their
+///   expected extra rooms `(mean_t * R / M - q_t) / q_t`.
+///
+/// The stairwell counts as the house's Hall/stairwell anchor.
+fn sample_room_types(
+    rng: &mut ChaCha8Rng,
+    stats: &HouseStats,
+    n: usize,
+    stairwell: bool,
+) -> Vec<RoomType> {
+    let means = type_means(stats);
+    let m_total: f64 = means.iter().map(|m| m.1).sum::<f64>().max(1e-9);
+    let total = n + usize::from(stairwell);
+    let s = total as f64 / m_total;
+    // (type, expected rooms, anchor probability, rooms so far)
+    let mut table: Vec<(RoomType, f64, f64, usize)> = means
+        .iter()
+        .map(|&(t, mean, presence)| {
+            let expected = mean * s;
+            if stairwell && t == RoomType::Hallway {
+                (t, expected, 1.0, 1)
+            } else {
+                (t, expected, presence.min(expected), 0)
+            }
+        })
+        .collect();
+    // anchors, most likely types first (random order among equals)
+    let mut order: Vec<usize> = (0..table.len()).collect();
+    for i in (1..order.len()).rev() {
+        order.swap(i, rng.random_range(0..=i));
+    }
+    order.sort_by(|&a, &b| table[b].2.total_cmp(&table[a].2));
+    let mut out = Vec::with_capacity(n);
+    for i in order {
+        if table[i].3 > 0 {
+            continue;
+        }
+        if rng.random::<f64>() < table[i].2 && out.len() < n {
+            table[i].3 += 1;
+            out.push(table[i].0);
+        }
+    }
+    // extra rooms among the types present
+    while out.len() < n {
+        let weights: Vec<(usize, f64)> = table
+            .iter()
+            .enumerate()
+            .filter(|(_, r)| r.3 > 0)
+            .map(|(i, r)| (i, ((r.1 - r.2) / r.2).max(0.0)))
+            .collect();
+        let pick = weighted_pick(rng, &weights).or_else(|| {
+            let all: Vec<(usize, f64)> = table.iter().enumerate().map(|(i, r)| (i, r.1)).collect();
+            weighted_pick(rng, &all)
+        });
+        let Some(i) = pick else {
+            out.push(RoomType::Bedroom);
+            continue;
+        };
+        table[i].3 += 1;
+        out.push(table[i].0);
+    }
+    out
+}
+
+/// Splits `area` into one room per type, areas in proportion to
+/// [`area_weight`]: the types are dealt into two groups of similar weight
+/// (largest first, each to the lighter group), the rectangle is cut across
+/// its longer side in that proportion (jittered by up to 15 %, keeping both
+/// parts at least `min_side` wide), and both parts recurse. A rectangle that
+/// cannot be cut keeps the first type of its group (the others are dropped).
+///
+/// # Complexity
+/// O(n log n) for n types.
+fn split_rooms(
+    rng: &mut ChaCha8Rng,
+    area: Rect,
+    types: &[RoomType],
+    min_side: f64,
+    out: &mut Vec<(Rect, RoomType)>,
+) {
+    let Some(&first) = types.first() else {
+        return;
+    };
+    if types.len() == 1 {
+        out.push((area, first));
+        return;
+    }
+    let mut order: Vec<RoomType> = types.to_vec();
+    order.sort_by(|a, b| area_weight(*b).total_cmp(&area_weight(*a)));
+    let (mut ga, mut gb) = (Vec::new(), Vec::new());
+    let (mut wa, mut wb) = (0.0, 0.0);
+    for t in order {
+        if wa <= wb {
+            wa += area_weight(t);
+            ga.push(t);
+        } else {
+            wb += area_weight(t);
+            gb.push(t);
+        }
+    }
+    if rng.random::<bool>() {
+        std::mem::swap(&mut ga, &mut gb);
+        std::mem::swap(&mut wa, &mut wb);
+    }
+    let along_x = area.w() >= area.d();
+    for x_axis in [along_x, !along_x] {
+        let len = if x_axis { area.w() } else { area.d() };
+        if len < 2.0 * min_side {
+            continue;
+        }
+        let base = wa / (wa + wb);
+        let jitter = rng.random_range(-0.15..=0.15) * base.min(1.0 - base);
+        let frac = (base + jitter).clamp(min_side / len, 1.0 - min_side / len);
+        let (a, b) = if x_axis {
+            let x = area.x0 + frac * area.w();
+            (Rect { x1: x, ..area }, Rect { x0: x, ..area })
+        } else {
+            let y = area.y0 + frac * area.d();
+            (Rect { y1: y, ..area }, Rect { y0: y, ..area })
+        };
+        split_rooms(rng, a, &ga, min_side, out);
+        split_rooms(rng, b, &gb, min_side, out);
+        return;
+    }
+    out.push((area, first));
 }
 
 fn find(p: &mut [usize], mut i: usize) -> usize {
@@ -275,6 +520,17 @@ fn weighted_pick<T: Copy>(rng: &mut ChaCha8Rng, items: &[(T, f64)]) -> Option<T>
         x -= w;
     }
     items.last().map(|i| i.0)
+}
+
+/// The HM3D house (floors, rooms, navigable area) that the house of `seed`
+/// imitates: the generator's first draw, uniform over `stats.houses`
+/// (`None` without houses).
+pub fn house_record(seed: u64, stats: &HouseStats) -> Option<&HouseSize> {
+    if stats.houses.is_empty() {
+        return None;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    stats.houses.get(rng.random_range(0..stats.houses.len()))
 }
 
 /// Generates a procedural house as a [`Scene`] (see the module docs).
@@ -314,20 +570,66 @@ pub fn generate_with_stats(
     let sw = 1.3;
     let sd = landing_len + run * n_steps as f64;
 
-    let per_floor = (house.navigable_area / floors as f64 * 1.6).clamp(40.0, 150.0);
+    // room budget: the stairwell of a two-floor house (stair block below,
+    // landing above) counts as one Hall/stairwell room
+    let stairwell = floors == 2;
+    let structural = usize::from(stairwell);
+    let min_sampled = if stairwell { 3 } else { 1 };
+    let cap = config.max_rooms_per_floor as usize * floors;
+    let n_sampled = (house.rooms as usize)
+        .saturating_sub(structural)
+        .max(min_sampled)
+        .min(cap.max(min_sampled));
+    let types = sample_room_types(&mut rng, stats, n_sampled, stairwell);
+
+    // footprint: navigable area times FOOTPRINT_PER_NAVIGABLE, at least
+    // MIN_ROOM_AREA per room, shared by the floors
+    let n_ground = if stairwell {
+        n_sampled.div_ceil(2).clamp(2, n_sampled - 1)
+    } else {
+        n_sampled
+    };
+    let stair_area = if stairwell { sw * sd } else { 0.0 };
+    let per_floor = (house.navigable_area * FOOTPRINT_PER_NAVIGABLE / floors as f64)
+        .max(n_ground as f64 * MIN_ROOM_AREA + stair_area)
+        .max((n_sampled - n_ground) as f64 * MIN_ROOM_AREA + stair_area)
+        .clamp(30.0, 500.0);
     let aspect = rng.random_range(1.0..1.6);
     let mut w = (per_floor * aspect).sqrt();
     let mut d = per_floor / w;
     if rng.random::<bool>() {
         std::mem::swap(&mut w, &mut d);
     }
-    let (w, d) = (w.max(6.0), d.max(if floors == 2 { sd + 2.6 } else { 6.0 }));
+    let (w, d) = (
+        w.max(if stairwell {
+            sw + 2.0 * config.min_room_side
+        } else {
+            6.0
+        }),
+        d.max(if stairwell { sd + 2.6 } else { 6.0 }),
+    );
 
-    let rooms_total = house.rooms.max(3) as usize;
+    // types per floor: ground-floor types first; within a floor the sampling
+    // order (anchors first) is kept, so that a layout with fewer leaves than
+    // types drops extra rooms first
+    let mut order: Vec<usize> = (0..types.len()).collect();
+    order.sort_by_key(|&i| (ground_rank(types[i]), i));
+    let mut idx_floor: Vec<Vec<usize>> = vec![Vec::new(); floors];
+    for (k, &i) in order.iter().enumerate() {
+        idx_floor[usize::from(stairwell && k >= n_ground)].push(i);
+    }
+    let by_floor: Vec<Vec<RoomType>> = idx_floor
+        .into_iter()
+        .map(|mut idx| {
+            idx.sort_unstable();
+            idx.into_iter().map(|i| types[i]).collect()
+        })
+        .collect();
+
     let mut plan: Vec<Vec<FloorRoom>> = Vec::new();
-    for f in 0..floors {
+    for (f, floor_types) in by_floor.into_iter().enumerate() {
         let mut rooms = Vec::new();
-        let main = if floors == 2 {
+        let areas: Vec<Rect> = if stairwell {
             rooms.push(FloorRoom {
                 rect: Rect {
                     x0: 0.0,
@@ -339,71 +641,83 @@ pub fn generate_with_stats(
                 stair: true,
                 landing: false,
             });
-            rooms.push(FloorRoom {
-                rect: Rect {
-                    x0: 0.0,
-                    y0: sd,
-                    x1: sw,
+            if f == 0 {
+                // ground floor: a strip across the whole house above the
+                // stair block and the area beside it
+                vec![
+                    Rect {
+                        x0: 0.0,
+                        y0: sd,
+                        x1: w,
+                        y1: d,
+                    },
+                    Rect {
+                        x0: sw,
+                        y0: 0.0,
+                        x1: w,
+                        y1: sd,
+                    },
+                ]
+            } else {
+                rooms.push(FloorRoom {
+                    rect: Rect {
+                        x0: 0.0,
+                        y0: sd,
+                        x1: sw,
+                        y1: d,
+                    },
+                    room_type: RoomType::Hallway,
+                    stair: false,
+                    landing: true,
+                });
+                vec![Rect {
+                    x0: sw,
+                    y0: 0.0,
+                    x1: w,
                     y1: d,
-                },
-                room_type: RoomType::Hallway,
-                stair: false,
-                landing: true,
-            });
-            Rect {
-                x0: sw,
-                y0: 0.0,
-                x1: w,
-                y1: d,
+                }]
             }
         } else {
-            Rect {
+            vec![Rect {
                 x0: 0.0,
                 y0: 0.0,
                 x1: w,
                 y1: d,
-            }
+            }]
         };
-        let by_area = (main.area() / 12.0).floor() as usize;
-        let n = (rooms_total / floors)
-            .clamp(3, config.max_rooms_per_floor as usize)
-            .min(by_area.max(2));
-        let mut leaves = split_bsp(&mut rng, main, n, config.min_room_side);
-        // room types: essentials then sampled
-        let mut types: Vec<RoomType> = match (floors, f) {
-            (1, _) => vec![
-                RoomType::LivingRoom,
-                RoomType::Kitchen,
-                RoomType::Bedroom,
-                RoomType::Bathroom,
-            ],
-            (_, 0) => vec![RoomType::LivingRoom, RoomType::Kitchen, RoomType::Bathroom],
-            _ => vec![RoomType::Bedroom, RoomType::Bathroom, RoomType::Bedroom],
-        };
-        let weights: Vec<(RoomType, f64)> = stats
-            .room_types
+        // deal the floor's types to its areas in proportion to their area
+        // (each type to the area furthest below its share; every area gets one)
+        let total_area: f64 = areas.iter().map(Rect::area).sum();
+        let w_total: f64 = floor_types.iter().map(|&t| area_weight(t)).sum();
+        let want: Vec<f64> = areas
             .iter()
-            .filter(|r| {
-                !matches!(
-                    r.room_type,
-                    RoomType::Hallway | RoomType::Stairs | RoomType::Other
-                )
-            })
-            .map(|r| (r.room_type, r.mean_per_scene))
+            .map(|a| w_total * a.area() / total_area)
             .collect();
-        while types.len() < leaves.len() {
-            types.push(weighted_pick(&mut rng, &weights).unwrap_or(RoomType::Bedroom));
+        let mut groups: Vec<Vec<RoomType>> = vec![Vec::new(); areas.len()];
+        let mut got = vec![0.0; areas.len()];
+        for (i, &t) in floor_types.iter().enumerate() {
+            let empty: Vec<usize> = (0..areas.len()).filter(|&k| groups[k].is_empty()).collect();
+            let k = if floor_types.len() - i <= empty.len() {
+                empty[0]
+            } else {
+                (0..areas.len())
+                    .max_by(|&a, &b| (want[a] - got[a]).total_cmp(&(want[b] - got[b])))
+                    .unwrap_or(0)
+            };
+            groups[k].push(t);
+            got[k] += area_weight(t);
         }
-        types.truncate(leaves.len());
-        types.sort_by_key(|&t| size_rank(t));
-        leaves.sort_by(|a, b| b.area().total_cmp(&a.area()));
-        for (rect, room_type) in leaves.into_iter().zip(types) {
-            rooms.push(FloorRoom {
-                rect,
-                room_type,
-                stair: false,
-                landing: false,
-            });
+        for (a, group) in areas.iter().zip(&groups) {
+            let mut leaves = Vec::new();
+            split_rooms(&mut rng, *a, group, config.min_room_side, &mut leaves);
+            for (rect, room_type) in leaves {
+                rooms.push(FloorRoom {
+                    rect,
+                    room_type,
+                    stair: false,
+                    landing: false,
+                });
+            }
         }
         plan.push(rooms);
     }
@@ -433,7 +747,11 @@ pub fn generate_with_stats(
                     if f == 1 {
                         continue; // railing around the stairwell
                     }
-                    // ground floor: only from the landing at the foot of the stairs
+                    // ground floor: only beside the foot of the stairs
+                    // (never across the top end, which is a storey up)
+                    if s.axis != 1 {
+                        continue;
+                    }
                     s.hi = s.hi.min(landing_len);
                 }
                 let margin = 0.05 + t * 0.5;
@@ -470,7 +788,7 @@ pub fn generate_with_stats(
             if a != b {
                 parent[a] = b;
                 chosen.push(o);
-            } else if rng.random::<f64>() < 0.3 {
+            } else if rng.random::<f64>() < EXTRA_DOOR_PROBABILITY {
                 chosen.push(o);
             }
         }
@@ -535,14 +853,23 @@ pub fn generate_with_stats(
         });
         let top = f + 1 == floors;
         for (ri, r) in rooms.iter().enumerate() {
-            let name = format!("{} {}", r.room_type.label(), ri);
-            rooms_out.push(Room {
-                name: name.clone(),
-                room_type: r.room_type,
-                level: f,
-                polygon: r.rect.polygon(),
-                floor_z: z,
-            });
+            let name = if r.stair {
+                STAIRWELL.to_string()
+            } else if r.landing {
+                STAIRWELL_LANDING.to_string()
+            } else {
+                format!("{} {}", r.room_type.label(), ri)
+            };
+            // the void above the stairs is part of the stairwell below
+            if !(r.stair && f > 0) {
+                rooms_out.push(Room {
+                    name: name.clone(),
+                    room_type: r.room_type,
+                    level: f,
+                    polygon: r.rect.polygon(),
+                    floor_z: z,
+                });
+            }
             if !(r.stair && f > 0) {
                 let fl = b.add_instance(InstanceKind::Floor, "floor", &name, f);
                 b.aabb_box(
@@ -572,45 +899,51 @@ pub fn generate_with_stats(
         }
     }
 
-    // furniture
-    let mut level_of_room = Vec::new();
+    // furniture: object lists drawn per room from its own type's statistics
+    // (the stairwell and its landing stay empty); with shuffled semantics the
+    // lists are then dealt to the rooms in random order, which keeps the
+    // house's objects and breaks the room-object association
+    let mut furnished: Vec<(usize, usize, Rect)> = Vec::new();
+    let mut lists: Vec<Vec<Drawn>> = Vec::new();
     for (f, rooms) in plan.iter().enumerate() {
         for (ri, r) in rooms.iter().enumerate() {
-            level_of_room.push((f, ri, r.rect, r.room_type, r.stair));
+            if r.stair || r.landing {
+                continue;
+            }
+            furnished.push((f, ri, r.rect));
+            lists.push(
+                stats
+                    .room_type(r.room_type)
+                    .map(|rs| draw_objects(&mut rng, rs))
+                    .unwrap_or_default(),
+            );
         }
     }
-    let types_with_stats: Vec<RoomType> = stats.room_types.iter().map(|r| r.room_type).collect();
-    for (f, ri, rect, room_type, stair) in level_of_room {
-        if stair {
-            continue;
+    if config.shuffled_semantics {
+        for i in (1..lists.len()).rev() {
+            lists.swap(i, rng.random_range(0..=i));
         }
+    }
+    for ((f, ri, rect), list) in furnished.into_iter().zip(lists) {
         let z = f as f64 * level_h;
-        let source_type = if config.shuffled_semantics {
-            types_with_stats[rng.random_range(0..types_with_stats.len())]
-        } else {
-            room_type
-        };
-        let Some(rs) = stats.room_type(source_type) else {
-            continue;
-        };
-        let mut keep_out: Vec<Rect> = Vec::new();
+        let mut room = RoomFurniture::default();
         for o in &openings[f] {
             if o.rooms.0 != ri && o.rooms.1 != ri {
                 continue;
             }
             let s = o.seg;
-            let depth = 1.1;
-            keep_out.push(if s.axis == 0 {
+            let depth = DOOR_CLEARANCE;
+            room.keep_out.push(if s.axis == 0 {
                 Rect {
-                    x0: s.lo - 0.3,
-                    x1: s.hi + 0.3,
+                    x0: s.lo - 0.2,
+                    x1: s.hi + 0.2,
                     y0: s.c - depth,
                     y1: s.c + depth,
                 }
             } else {
                 Rect {
-                    y0: s.lo - 0.3,
-                    y1: s.hi + 0.3,
+                    y0: s.lo - 0.2,
+                    y1: s.hi + 0.2,
                     x0: s.c - depth,
                     x1: s.c + depth,
                 }
@@ -640,79 +973,86 @@ pub fn generate_with_stats(
                 }
             })
             .collect();
-        let mut placed: Vec<Rect> = Vec::new();
-        let mut mounted: Vec<Rect> = Vec::new();
         let mut used_area = 0.0;
-        // floor pieces first, then wall-mounted ones, which must stay reachable
-        let mut order: Vec<&CategoryStats> = rs.objects.iter().collect();
-        order
-            .sort_by_key(|c| shape(&c.category).is_some_and(|s| s.placement == Placement::Mounted));
-        for cs in order {
-            let Some(sh) = shape(&cs.category) else {
+        // placement order: first instances of every category before second
+        // ones; within a round floor pieces before wall-mounted ones, large
+        // pieces (over 0.8 m^2) before small ones, each by decreasing HM3D
+        // presence. A later floor piece may not cut a mounted one off the
+        // free floor (`room_stays_open`) nor stand tall in front of it.
+        let mut items: Vec<(Drawn, u32)> = list
+            .iter()
+            .flat_map(|&d| (0..d.count).map(move |k| (d, k)))
+            .collect();
+        items.sort_by(|(a, ka), (b, kb)| {
+            let mounted_a = a.shape.placement == Placement::Mounted;
+            let mounted_b = b.shape.placement == Placement::Mounted;
+            let area = |d: &Drawn| d.shape.width.1 * d.shape.depth.1;
+            ka.cmp(kb)
+                .then(mounted_a.cmp(&mounted_b))
+                .then((area(b) > 0.8).cmp(&(area(a) > 0.8)))
+                .then(b.presence.total_cmp(&a.presence))
+                .then(area(b).total_cmp(&area(a)))
+        });
+        for (drawn, k) in items {
+            let sh = drawn.shape;
+            let size = (
+                rng.random_range(sh.width.0..=sh.width.1),
+                rng.random_range(sh.depth.0..=sh.depth.1),
+                rng.random_range(sh.height.0..=sh.height.1),
+            );
+            let mounted = sh.placement == Placement::Mounted;
+            // the floor-space budget limits extra instances only, so that
+            // presence follows the statistics even in small rooms
+            if !mounted && k > 0 && used_area + size.0 * size.1 > MAX_FURNISHED_SHARE * rect.area()
+            {
+                continue;
+            }
+            let accept = |c: &Candidate| {
+                if mounted {
+                    viewable(&inner, &room.placed, &door_points, &c.foot)
+                } else {
+                    let mut trial = room.placed.clone();
+                    trial.push(c.foot);
+                    room_stays_open(&inner, &trial, &door_points, &room.mounted)
+                }
+            };
+            let Some(Candidate {
+                centre: at,
+                yaw,
+                foot,
+                clear,
+                ..
+            }) = place(
+                &mut rng,
+                sh.category,
+                sh.placement,
+                (size.0, size.1),
+                size.2 > MOUNT_HEIGHT - 0.1,
+                &inner,
+                &room,
+                accept,
+            )
+            else {
                 continue;
             };
-            if rng.random::<f64>() >= cs.presence {
-                continue;
-            }
-            // count: 1 + geometric with mean (mean_count - 1)
-            let mut count = 1u32;
-            let p_more = ((cs.mean_count - 1.0) / cs.mean_count).clamp(0.0, 0.9);
-            while count < sh.max_per_room && rng.random::<f64>() < p_more {
-                count += 1;
-            }
-            for k in 0..count {
-                let size = (
-                    rng.random_range(sh.width.0..=sh.width.1),
-                    rng.random_range(sh.depth.0..=sh.depth.1),
-                    rng.random_range(sh.height.0..=sh.height.1),
-                );
-                if sh.placement != Placement::Mounted
-                    && used_area + size.0 * size.1 > 0.3 * rect.area()
-                {
-                    break;
-                }
-                let Some((at, yaw, foot)) = place(
-                    &mut rng,
-                    sh.placement,
-                    size,
-                    &inner,
-                    &placed,
-                    &mounted,
-                    &keep_out,
-                ) else {
-                    break;
-                };
-                if sh.placement != Placement::Mounted {
-                    let mut trial = placed.clone();
-                    trial.push(foot);
-                    if !room_stays_open(&inner, &trial, &door_points) {
-                        continue;
-                    }
-                } else if !viewable(&inner, &placed, &door_points, &foot) {
-                    continue;
-                }
-                let inst = b.add_instance(
-                    InstanceKind::Object,
-                    sh.category,
-                    &format!("{} {}", sh.category, k + 1),
-                    f,
-                );
-                let at = Point3::new(
-                    at.x,
-                    at.y,
-                    z + if sh.placement == Placement::Mounted {
-                        1.2
-                    } else {
-                        0.0
-                    },
-                );
-                furniture::build(&mut b, inst, sh.category, size, at, yaw);
-                if sh.placement == Placement::Mounted {
-                    mounted.push(foot);
-                } else {
-                    used_area += size.0 * size.1;
-                    placed.push(foot);
-                }
+            let inst = b.add_instance(
+                InstanceKind::Object,
+                sh.category,
+                &format!("{} {}", sh.category, k + 1),
+                f,
+            );
+            let at = Point3::new(at.x, at.y, z + if mounted { MOUNT_HEIGHT } else { 0.0 });
+            furniture::build(&mut b, inst, sh.category, size, at, yaw);
+            if mounted {
+                room.mounted.push(foot);
+                room.mounted_clears.push(clear);
+            } else {
+                used_area += size.0 * size.1;
+                room.placed.push(foot);
+                room.tall.push(size.2 > MOUNT_HEIGHT - 0.1);
+                room.clears.push(clear);
+                room.categories.push(sh.category);
+                room.against_wall.push(sh.placement == Placement::Wall);
             }
         }
     }
@@ -791,7 +1131,7 @@ fn cell_of(inner: &Rect, nx: usize, ny: usize, p: &Point2<f64>) -> usize {
 
 /// True when every doorway of the room is free and all doorways (and, for a
 /// room without doors, some free cell) lie in one free component.
-fn room_stays_open(inner: &Rect, placed: &[Rect], doors: &[Point2<f64>]) -> bool {
+fn room_stays_open(inner: &Rect, placed: &[Rect], doors: &[Point2<f64>], mounted: &[Rect]) -> bool {
     let (label, nx, ny) = free_components(inner, placed);
     let mut comp = None;
     for d in doors {
@@ -801,12 +1141,18 @@ fn room_stays_open(inner: &Rect, placed: &[Rect], doors: &[Point2<f64>]) -> bool
         }
         comp = Some(l);
     }
-    // every placed piece keeps a free cell of that component within 0.9 m
+    // every piece, floor-standing or wall-mounted, keeps a free cell of that
+    // component within 0.8 m
     placed
         .iter()
+        .chain(mounted)
         .all(|p| near_component(inner, &label, nx, ny, comp, p))
 }
 
+/// True when a free cell of component `comp` (any component when `None`)
+/// lies within 0.8 m (Euclidean) of the footprint: an agent standing there
+/// is within the 1 m view point radius even after the height field's
+/// rasterisation.
 fn near_component(
     inner: &Rect,
     label: &[u32],
@@ -815,19 +1161,16 @@ fn near_component(
     comp: Option<u32>,
     foot: &Rect,
 ) -> bool {
-    let reach = foot.inflate(0.9);
+    const REACH: f64 = 0.8;
     (0..nx * ny).any(|k| {
         let c = Point2::new(
             inner.x0 + ((k % nx) as f64 + 0.5) * 0.1,
             inner.y0 + ((k / nx) as f64 + 0.5) * 0.1,
         );
         let l = label[k];
-        l != u32::MAX
-            && comp.is_none_or(|cc| cc == l)
-            && c.x > reach.x0
-            && c.x < reach.x1
-            && c.y > reach.y0
-            && c.y < reach.y1
+        let dx = (foot.x0 - c.x).max(c.x - foot.x1).max(0.0);
+        let dy = (foot.y0 - c.y).max(c.y - foot.y1).max(0.0);
+        l != u32::MAX && comp.is_none_or(|cc| cc == l) && dx.hypot(dy) <= REACH
     }) || ny == 0
 }
 
@@ -839,61 +1182,184 @@ fn viewable(inner: &Rect, placed: &[Rect], doors: &[Point2<f64>], foot: &Rect) -
     near_component(inner, &label, nx, ny, comp, foot)
 }
 
-/// Finds a position for a piece. Returns (centre, yaw, footprint).
-fn place(
-    rng: &mut ChaCha8Rng,
-    placement: Placement,
-    (w, d, _h): (f64, f64, f64),
-    inner: &Rect,
-    placed: &[Rect],
-    mounted: &[Rect],
-    keep_out: &[Rect],
-) -> Option<(Point2<f64>, f64, Rect)> {
-    const MARGIN: f64 = 0.65;
-    for _ in 0..40 {
-        let (c, yaw, foot, clear) = match placement {
-            Placement::Free => {
-                let quarter = rng.random_range(0..4);
+/// Furniture placed in one room so far.
+#[derive(Default)]
+struct RoomFurniture {
+    /// Footprints of floor-standing pieces.
+    placed: Vec<Rect>,
+    /// Whether each floor-standing piece reaches above a wall-mounted one (1.1 m).
+    tall: Vec<bool>,
+    /// Floor kept clear in front of (or around) each floor-standing piece.
+    clears: Vec<Rect>,
+    /// Footprints of wall-mounted pieces.
+    mounted: Vec<Rect>,
+    /// Floor in front of each wall-mounted piece, kept free of tall pieces.
+    mounted_clears: Vec<Rect>,
+    /// Floor kept clear at the doorways.
+    keep_out: Vec<Rect>,
+    /// Category of each floor-standing piece.
+    categories: Vec<&'static str>,
+    /// Whether each floor-standing piece stands against a wall.
+    against_wall: Vec<bool>,
+}
+
+/// A candidate pose of a piece.
+#[derive(Debug, Clone, Copy)]
+struct Candidate {
+    centre: Point2<f64>,
+    yaw: f64,
+    foot: Rect,
+    /// Floor the piece keeps clear.
+    clear: Rect,
+    /// The placed piece (a table) this one is drawn up to: its clearance
+    /// zone does not block this piece.
+    beside: Option<usize>,
+}
+
+impl Candidate {
+    fn new(centre: Point2<f64>, yaw: f64, foot: Rect, clear: Rect) -> Candidate {
+        Candidate {
+            centre,
+            yaw,
+            foot,
+            clear,
+            beside: None,
+        }
+    }
+}
+
+/// Candidate poses of a piece of size (w, d): free-standing pieces on a 0.1 m
+/// grid of centres keeping `margin` to the walls, in both orientations;
+/// wall pieces every 0.1 m along each wall, back against it, with a
+/// clearance zone of [`WALL_FRONT_CLEARANCE`] in front.
+fn candidates(placement: Placement, (w, d): (f64, f64), inner: &Rect) -> Vec<Candidate> {
+    const STEP: f64 = 0.1;
+    let range = |lo: f64, hi: f64| -> Vec<f64> {
+        if lo > hi {
+            return Vec::new();
+        }
+        let n = ((hi - lo) / STEP).floor() as usize;
+        let mut v: Vec<f64> = (0..=n).map(|i| lo + i as f64 * STEP).collect();
+        if hi - v[v.len() - 1] > 1e-9 {
+            v.push(hi);
+        }
+        v
+    };
+    let mut out = Vec::new();
+    match placement {
+        Placement::Free => {
+            let margin = free_margin(w, d);
+            for quarter in 0..2u32 {
+                let (fw, fd) = if quarter == 1 { (d, w) } else { (w, d) };
                 let yaw = f64::from(quarter) * std::f64::consts::FRAC_PI_2;
-                let (fw, fd) = if quarter % 2 == 1 { (d, w) } else { (w, d) };
-                let lo = (inner.x0 + fw * 0.5 + MARGIN, inner.y0 + fd * 0.5 + MARGIN);
-                let hi = (inner.x1 - fw * 0.5 - MARGIN, inner.y1 - fd * 0.5 - MARGIN);
-                if lo.0 > hi.0 || lo.1 > hi.1 {
-                    return None;
+                let xs = range(inner.x0 + fw * 0.5 + margin, inner.x1 - fw * 0.5 - margin);
+                let ys = range(inner.y0 + fd * 0.5 + margin, inner.y1 - fd * 0.5 - margin);
+                for &x in &xs {
+                    for &y in &ys {
+                        let foot = Rect {
+                            x0: x - fw * 0.5,
+                            x1: x + fw * 0.5,
+                            y0: y - fd * 0.5,
+                            y1: y + fd * 0.5,
+                        };
+                        out.push(Candidate::new(
+                            Point2::new(x, y),
+                            yaw,
+                            foot,
+                            foot.inflate(margin),
+                        ));
+                    }
                 }
-                let c = Point2::new(rng.random_range(lo.0..=hi.0), rng.random_range(lo.1..=hi.1));
-                let foot = Rect {
-                    x0: c.x - fw * 0.5,
-                    x1: c.x + fw * 0.5,
-                    y0: c.y - fd * 0.5,
-                    y1: c.y + fd * 0.5,
-                };
-                (c, yaw, foot, foot.inflate(MARGIN))
             }
-            Placement::Wall | Placement::Mounted => {
-                // side 0: wall at y0 (piece faces +y), 1: x1 (faces -x), 2: y1 (faces -y), 3: x0 (faces +x)
-                let side = rng.random_range(0..4);
+        }
+        Placement::Wall | Placement::Mounted => {
+            // side 0: wall at y0 (piece faces +y), 1: x1 (faces -x), 2: y1
+            // (faces -y), 3: x0 (faces +x)
+            for side in 0..4 {
                 let (along_lo, along_hi) = if side % 2 == 0 {
                     (inner.x0, inner.x1)
                 } else {
                     (inner.y0, inner.y1)
                 };
-                if along_hi - along_lo < w + 0.1 {
-                    continue;
+                for a in range(along_lo + w * 0.5 + 0.05, along_hi - w * 0.5 - 0.05) {
+                    let (c, yaw) = match side {
+                        0 => (Point2::new(a, inner.y0 + d * 0.5), std::f64::consts::PI),
+                        1 => (
+                            Point2::new(inner.x1 - d * 0.5, a),
+                            -std::f64::consts::FRAC_PI_2,
+                        ),
+                        2 => (Point2::new(a, inner.y1 - d * 0.5), 0.0),
+                        _ => (
+                            Point2::new(inner.x0 + d * 0.5, a),
+                            std::f64::consts::FRAC_PI_2,
+                        ),
+                    };
+                    let (fw, fd) = if side % 2 == 0 { (w, d) } else { (d, w) };
+                    let foot = Rect {
+                        x0: c.x - fw * 0.5,
+                        x1: c.x + fw * 0.5,
+                        y0: c.y - fd * 0.5,
+                        y1: c.y + fd * 0.5,
+                    };
+                    let front = WALL_FRONT_CLEARANCE;
+                    let clear = match side {
+                        0 => Rect {
+                            y1: foot.y1 + front,
+                            ..foot.inflate(0.05)
+                        },
+                        1 => Rect {
+                            x0: foot.x0 - front,
+                            ..foot.inflate(0.05)
+                        },
+                        2 => Rect {
+                            y0: foot.y0 - front,
+                            ..foot.inflate(0.05)
+                        },
+                        _ => Rect {
+                            x1: foot.x1 + front,
+                            ..foot.inflate(0.05)
+                        },
+                    };
+                    out.push(Candidate::new(c, yaw, foot, clear));
                 }
-                let a = rng.random_range(along_lo + w * 0.5 + 0.05..=along_hi - w * 0.5 - 0.05);
+            }
+        }
+    }
+    out
+}
+
+/// Poses of a seat (chair, stool) of size (w, d) drawn up to a placed table
+/// or counter: every 0.1 m along each of its sides, 0.05 m away, facing it,
+/// keeping 0.45 m of the room's floor clear behind.
+fn seat_candidates((w, d): (f64, f64), inner: &Rect, room: &RoomFurniture) -> Vec<Candidate> {
+    let mut out = Vec::new();
+    for (i, (t, &cat)) in room.placed.iter().zip(&room.categories).enumerate() {
+        if cat != "table" && cat != "counter" {
+            continue;
+        }
+        // side 0: south of the table, facing +y; 1: east, facing -x;
+        // 2: north, facing -y; 3: west, facing +x
+        for side in 0..4 {
+            let (lo, hi) = if side % 2 == 0 {
+                (t.x0, t.x1)
+            } else {
+                (t.y0, t.y1)
+            };
+            let mut a = lo + w * 0.5;
+            while a <= hi - w * 0.5 + 1e-9 {
                 let (c, yaw) = match side {
-                    0 => (Point2::new(a, inner.y0 + d * 0.5), std::f64::consts::PI),
+                    0 => (Point2::new(a, t.y0 - 0.05 - d * 0.5), std::f64::consts::PI),
                     1 => (
-                        Point2::new(inner.x1 - d * 0.5, a),
+                        Point2::new(t.x1 + 0.05 + d * 0.5, a),
                         -std::f64::consts::FRAC_PI_2,
                     ),
-                    2 => (Point2::new(a, inner.y1 - d * 0.5), 0.0),
+                    2 => (Point2::new(a, t.y1 + 0.05 + d * 0.5), 0.0),
                     _ => (
-                        Point2::new(inner.x0 + d * 0.5, a),
+                        Point2::new(t.x0 - 0.05 - d * 0.5, a),
                         std::f64::consts::FRAC_PI_2,
                     ),
                 };
+                a += 0.1;
                 let (fw, fd) = if side % 2 == 0 { (w, d) } else { (d, w) };
                 let foot = Rect {
                     x0: c.x - fw * 0.5,
@@ -901,40 +1367,145 @@ fn place(
                     y0: c.y - fd * 0.5,
                     y1: c.y + fd * 0.5,
                 };
-                // clearance in front of the piece
-                let front = MARGIN + 0.1;
+                if foot.x0 < inner.x0
+                    || foot.x1 > inner.x1
+                    || foot.y0 < inner.y0
+                    || foot.y1 > inner.y1
+                {
+                    continue;
+                }
+                let back = 0.45;
                 let clear = match side {
                     0 => Rect {
-                        y1: foot.y1 + front,
-                        ..foot.inflate(0.05)
+                        y0: foot.y0 - back,
+                        ..foot.inflate(0.03)
                     },
                     1 => Rect {
-                        x0: foot.x0 - front,
-                        ..foot.inflate(0.05)
+                        x1: foot.x1 + back,
+                        ..foot.inflate(0.03)
                     },
                     2 => Rect {
-                        y0: foot.y0 - front,
-                        ..foot.inflate(0.05)
+                        y1: foot.y1 + back,
+                        ..foot.inflate(0.03)
                     },
                     _ => Rect {
-                        x1: foot.x1 + front,
-                        ..foot.inflate(0.05)
+                        x0: foot.x0 - back,
+                        ..foot.inflate(0.03)
                     },
                 };
-                (c, yaw, foot, clear)
+                // the floor behind the seat lies inside the room
+                if clear.x0 < inner.x0
+                    || clear.x1 > inner.x1
+                    || clear.y0 < inner.y0
+                    || clear.y1 > inner.y1
+                {
+                    continue;
+                }
+                out.push(Candidate {
+                    beside: Some(i),
+                    ..Candidate::new(c, yaw, foot, clear)
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Share of a wall piece's clearance zone that another wall piece may cover.
+const CLEARANCE_SHARE: f64 = 0.4;
+
+/// Area of the intersection of two rectangles.
+fn overlap_area(a: &Rect, b: &Rect) -> f64 {
+    (a.x1.min(b.x1) - a.x0.max(b.x0)).max(0.0) * (a.y1.min(b.y1) - a.y0.max(b.y0)).max(0.0)
+}
+
+/// Floor a free-standing piece keeps around it (small pieces less).
+fn free_margin(w: f64, d: f64) -> f64 {
+    if w * d < 0.35 { 0.45 } else { 0.65 }
+}
+
+/// Whether a candidate pose collides with what the room holds: wall pieces
+/// may stand side by side, but nothing stands in another piece's clearance
+/// zone, and wall-mounted pieces hang only above (and in front of) pieces
+/// lower than 1.1 m (`tall`: the candidate is a floor piece reaching higher).
+fn blocked(placement: Placement, tall: bool, cand: &Candidate, room: &RoomFurniture) -> bool {
+    let (foot, clear) = (&cand.foot, &cand.clear);
+    if placement == Placement::Mounted {
+        room.mounted.iter().any(|m| m.inflate(0.1).overlaps(foot))
+            || room
+                .placed
+                .iter()
+                .zip(&room.tall)
+                .any(|(p, &tall)| tall && (p.overlaps(clear) || p.inflate(0.05).overlaps(foot)))
+    } else {
+        // two wall pieces may share part of their clearance zones (pieces
+        // meeting at a corner); otherwise clearance zones stay free
+        let wall = placement == Placement::Wall;
+        let cuts = |zone: &Rect, r: &Rect, shareable: bool| {
+            if shareable {
+                overlap_area(zone, r) > CLEARANCE_SHARE * zone.area()
+            } else {
+                zone.overlaps(r)
             }
         };
-        let blocked = if placement == Placement::Mounted {
-            mounted.iter().any(|m| m.inflate(0.1).overlaps(&foot))
-                || placed.iter().any(|p| p.overlaps(&clear))
-        } else {
-            placed
+        room.placed
+            .iter()
+            .zip(&room.against_wall)
+            .any(|(p, &pw)| cuts(clear, p, wall && pw) || p.inflate(0.02).overlaps(foot))
+            || room
+                .clears
                 .iter()
-                .any(|p| p.overlaps(&clear) || p.inflate(MARGIN).overlaps(&foot))
-                || keep_out.iter().any(|k| k.overlaps(&foot))
-        };
-        if !blocked {
-            return Some((c, yaw, foot));
+                .zip(&room.against_wall)
+                .enumerate()
+                .any(|(i, (c, &pw))| cand.beside != Some(i) && cuts(c, foot, wall && pw))
+            || room.keep_out.iter().any(|k| k.overlaps(foot))
+            || (tall
+                && room
+                    .mounted
+                    .iter()
+                    .zip(&room.mounted_clears)
+                    .any(|(m, c)| m.inflate(0.05).overlaps(foot) || c.overlaps(foot)))
+    }
+}
+
+/// Finds a pose for a piece: seats first try the places at tables
+/// ([`seat_candidates`]), then every piece its candidate poses
+/// ([`candidates`]), each group in random order; the first pose that is not
+/// [`blocked`] and passes `accept` wins. At most 16 unblocked poses per group
+/// are offered to `accept` (it runs a flood fill).
+#[allow(clippy::too_many_arguments)]
+fn place(
+    rng: &mut ChaCha8Rng,
+    category: &str,
+    placement: Placement,
+    size: (f64, f64),
+    tall: bool,
+    inner: &Rect,
+    room: &RoomFurniture,
+    mut accept: impl FnMut(&Candidate) -> bool,
+) -> Option<Candidate> {
+    let mut groups = Vec::new();
+    if matches!(category, "chair" | "stool") {
+        groups.push(seat_candidates(size, inner, room));
+    }
+    groups.push(candidates(placement, size, inner));
+    for mut cands in groups {
+        let n = cands.len();
+        let mut tried = 0;
+        for i in 0..n {
+            let j = rng.random_range(i..n);
+            cands.swap(i, j);
+            let c = &cands[i];
+            if blocked(placement, tall, c, room) {
+                continue;
+            }
+            tried += 1;
+            if accept(c) {
+                return Some(*c);
+            }
+            if tried >= 16 {
+                break;
+            }
         }
     }
     None

@@ -44,6 +44,10 @@ pub struct RoomTypeStats {
     pub regions: usize,
     /// Mean number of rooms of this type per scene.
     pub mean_per_scene: f64,
+    /// Fraction of scenes with at least one room of this type (0 when the
+    /// figure is missing from an older statistics file).
+    #[serde(default)]
+    pub scene_presence: f64,
     /// Object statistics.
     pub objects: Vec<CategoryStats>,
 }
@@ -99,9 +103,12 @@ impl HouseStats {
             }
         }
         for r in &self.room_types {
-            if !(r.mean_per_scene.is_finite() && r.mean_per_scene >= 0.0) {
+            if !(r.mean_per_scene.is_finite()
+                && r.mean_per_scene >= 0.0
+                && (0.0..=1.0).contains(&r.scene_presence))
+            {
                 return Err(SceneError::Invalid(format!(
-                    "{:?}: bad mean_per_scene",
+                    "{:?}: bad mean_per_scene or scene_presence",
                     r.room_type
                 )));
             }

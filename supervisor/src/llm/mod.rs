@@ -108,12 +108,13 @@ impl LlmConfig {
     /// Checks the ranges.
     ///
     /// # Errors
-    /// [`SupervisorError::InvalidConfig`] for a non-positive or non-finite
-    /// timeout, a negative or non-finite interval or temperature, or an
+    /// [`SupervisorError::InvalidConfig`] for a non-positive, non-finite or
+    /// unrepresentable (beyond [`Duration::MAX`]) timeout, a negative or non-finite interval or temperature, or an
     /// empty base URL or model.
     pub fn validate(&self) -> Result<(), SupervisorError> {
         let ok = self.timeout_s.is_finite()
             && self.timeout_s > 0.0
+            && Duration::try_from_secs_f64(self.timeout_s).is_ok()
             && self.min_interval_s.is_finite()
             && self.min_interval_s >= 0.0
             && self.temperature.is_finite()
@@ -477,5 +478,50 @@ impl ContextPolicy for LlmPolicy {
         }
         let result = self.client.exchange(&key);
         self.conclude(key, result, snapshot)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn config_validation_rejects_bad_values_without_panicking() {
+        assert!(LlmConfig::default().validate().is_ok());
+        let bad = [
+            LlmConfig {
+                timeout_s: 0.0,
+                ..LlmConfig::default()
+            },
+            LlmConfig {
+                timeout_s: f64::NAN,
+                ..LlmConfig::default()
+            },
+            // Finite but beyond `Duration::MAX`: must be an error, not a
+            // panic in `Duration::from_secs_f64`.
+            LlmConfig {
+                timeout_s: 1e30,
+                ..LlmConfig::default()
+            },
+            LlmConfig {
+                min_interval_s: -1.0,
+                ..LlmConfig::default()
+            },
+            LlmConfig {
+                temperature: f64::INFINITY,
+                ..LlmConfig::default()
+            },
+            LlmConfig {
+                model: " ".into(),
+                ..LlmConfig::default()
+            },
+        ];
+        for config in bad {
+            assert!(config.validate().is_err(), "{config:?}");
+            assert!(matches!(
+                LlmPolicy::http(config),
+                Err(SupervisorError::InvalidConfig(_))
+            ));
+        }
     }
 }

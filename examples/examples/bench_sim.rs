@@ -1,0 +1,98 @@
+//! Speed of the simulator pipeline on one core: the full SOR-Nav agent
+//! (commonsense gate, TSP) on procedural-house episodes, at 160x120 and at
+//! Habitat's 640x480. Prints one JSON line per resolution:
+//! `{"width","height","episodes","actions_mean","episode_s_p50",
+//! "s_per_500_actions","decision_ms_p50","decision_ms_p99","frame_ms_p50",
+//! "timeouts"}`.
+//!
+//! `cargo run --release -p sornav-examples --example bench_sim [-- EPISODES]`
+
+use std::time::Instant;
+
+use sornav_examples::adapter::{AdapterConfig, ConfigFactory, SornavPolicy};
+use sornav_examples::histogram::Histogram;
+use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
+use sornav_platform_sim::procedural::ProceduralConfig;
+use sornav_platform_sim::{
+    CameraConfig, Outcome, RunConfig, Scene, SimConfig, Simulator, run_episode,
+};
+
+fn main() {
+    let episodes: usize = std::env::args()
+        .nth(1)
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(12);
+    // One core: a single-thread pool for rendering and everything else.
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("thread pool");
+    let agent = sornav_examples::adapter::sim_agent_config();
+    let factory = ConfigFactory {
+        config: agent,
+        policy: None,
+    };
+    for (width, height) in [(160u32, 120u32), (640, 480)] {
+        let camera = CameraConfig {
+            width,
+            height,
+            ..CameraConfig::default()
+        };
+        let (mut walls, mut actions, mut timeouts) = (Vec::new(), 0usize, 0usize);
+        let (mut decision, mut frame) = (Histogram::new(), Histogram::new());
+        let mut seed = 100;
+        while walls.len() < episodes {
+            seed += 1;
+            let house = ProceduralConfig {
+                floors: Some(1),
+                ..ProceduralConfig::default()
+            };
+            let scene = Scene::procedural(seed, &house).expect("procedural house");
+            let sim = Simulator::new(
+                scene,
+                SimConfig {
+                    camera: camera.clone(),
+                    ..SimConfig::default()
+                },
+            )
+            .expect("simulator");
+            let generator = GeneratorConfig {
+                episodes_per_category: 1,
+                seed,
+                ..GeneratorConfig::default()
+            };
+            let eps = generate_episodes(&sim, &generator).expect("episodes");
+            for e in eps.iter().take(2) {
+                if walls.len() >= episodes {
+                    break;
+                }
+                let mut policy = SornavPolicy::new(&factory, AdapterConfig::default());
+                let t0 = Instant::now();
+                let r = pool
+                    .install(|| run_episode(&sim, e, &mut policy, &RunConfig::default()))
+                    .expect("episode");
+                walls.push(t0.elapsed().as_secs_f64());
+                actions += r.actions;
+                timeouts += usize::from(r.outcome == Outcome::Timeout);
+                let trace = policy.take_trace();
+                decision.merge(&trace.decision_ms);
+                frame.merge(&trace.frame_ms);
+            }
+        }
+        let total: f64 = walls.iter().sum();
+        walls.sort_by(f64::total_cmp);
+        let line = serde_json::json!({
+            "width": width,
+            "height": height,
+            "episodes": walls.len(),
+            "actions_mean": actions as f64 / walls.len() as f64,
+            "episode_s_p50": walls[walls.len() / 2],
+            "s_per_500_actions": total / actions as f64 * 500.0,
+            "decision_ms_p50": decision.quantile(0.5),
+            "decision_ms_p99": decision.quantile(0.99),
+            "frame_ms_p50": frame.quantile(0.5),
+            "timeouts": timeouts,
+        });
+        println!("{line}");
+    }
+}

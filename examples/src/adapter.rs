@@ -1,0 +1,774 @@
+//! The SOR-Nav [`Agent`] on platform-sim's ObjectNav protocol.
+//!
+//! [`SornavPolicy`] implements platform-sim's [`Policy`]: every step it turns
+//! the rendered depth + semantic frame into an [`Observation`] for the agent,
+//! asks the agent for a command and turns the command into one of Habitat's
+//! discrete actions.
+//!
+//! * **Start**: `scan_turns` (12) TURN_LEFT actions, observing after each,
+//!   so the agent has seen all around before its first decision.
+//! * **Missions** become actions by following the mission's executable path
+//!   on the agent's own traversability map (pure pursuit): the target is the
+//!   point `lookahead_m` further along the path than the robot's closest
+//!   path point; of the headings reachable by turning, the one whose forward
+//!   move stays on the agent's traversable cells and ends nearest the target
+//!   is chosen — MOVE_FORWARD when it is the current heading, otherwise a
+//!   turn toward it. The path is re-planned on the agent's map every
+//!   `replan_every` actions and after every collision (the map changes as
+//!   the robot sees more). A forward move that collides is remembered and
+//!   not tried again from the same place; after `max_collisions` collisions
+//!   without progress the mission is reported stuck (the agent then
+//!   excludes its frontier or rejects its candidate).
+//! * **Verification**: on [`AgentCommand::Verify`] the camera is turned
+//!   toward the candidate (one action even when already facing it, so that
+//!   the next frame is fresh), the frame is observed and the agent stepped
+//!   again: STOP only when the target gate confirms.
+//! * **STOP** when the agent confirms the target, or when its search is
+//!   exhausted (nothing left to explore, no candidate) and one more full
+//!   turn in place has not revealed anything new.
+//!
+//! The agent's maps are built only from these frames: the semantic channel
+//! is the simulator's instance image mapped to category labels (the
+//! semantic sensor Habitat also provides); nothing else of the scene is
+//! read. Coordinates are the world's with `z` measured from the start
+//! floor, so the agent's 2-D grid sits on the floor it starts on.
+
+use std::collections::{BTreeMap, HashSet};
+use std::time::{Duration, Instant};
+
+use nalgebra::{Point2, Point3};
+use serde::{Deserialize, Serialize};
+use sornav::executor::{FailureReason, MissionId, MissionKind, MissionStatus, RobotPose};
+use sornav::semantic_map::{LabelId, PinholeCamera, optical_pose};
+use sornav::{
+    Agent, AgentCommand, AgentConfig, AgentError, BoxedPolicy, DepthObservation, LabelEntry,
+    Observation, Sensor,
+};
+use sornav_platform_sim::render::NO_INSTANCE;
+use sornav_platform_sim::{Action, Episode, InstanceKind, Policy, Scene, Simulator};
+
+use crate::decision_log::DecisionLog;
+use crate::histogram::Histogram;
+
+/// How agent commands become discrete actions.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct AdapterConfig {
+    /// TURN_LEFT actions at the start of an episode (12 x 30 deg = one
+    /// full turn).
+    pub scan_turns: usize,
+    /// Simulated seconds per action, the agent's clock (0.5 s: a 0.25 m
+    /// step at 0.5 m/s). The supervisor's rate limit, mission timeouts and
+    /// stuck detection run on this clock.
+    pub seconds_per_action: f64,
+    /// Heading error (degrees) below which the agent moves forward instead
+    /// of turning (15: half of the simulator's 30-degree turn).
+    pub heading_tolerance_deg: f64,
+    /// A path point counts as passed within this distance (m).
+    pub path_point_radius_m: f64,
+    /// Pure-pursuit look-ahead along the path (m).
+    pub lookahead_m: f64,
+    /// Re-plan the active mission's path on the agent's map every this
+    /// many actions.
+    pub replan_every: usize,
+    /// Collisions without progress before the mission is reported blocked.
+    pub max_collisions: usize,
+}
+
+impl Default for AdapterConfig {
+    fn default() -> Self {
+        Self {
+            scan_turns: 12,
+            seconds_per_action: 0.5,
+            heading_tolerance_deg: 15.0,
+            path_point_radius_m: 0.2,
+            lookahead_m: 0.5,
+            replan_every: 8,
+            max_collisions: 4,
+        }
+    }
+}
+
+/// The agent configuration of simulator runs: the paper's defaults, with
+/// * `NAV_TO_OBJECT` waypoints 0.4-0.7 m from the object with a line of
+///   sight to it, reached within 0.3 m: Habitat's success needs the agent
+///   within 0.1 m of a view point, a pose within 1 m of the object from
+///   which the object is visible in the camera's vertical field of view;
+/// * frontier viewpoints reached within 0.5 m (the camera does not see the
+///   floor within 1.5 m of the robot).
+pub fn sim_agent_config() -> AgentConfig {
+    let mut c = AgentConfig::default();
+    c.approach.min_standoff_m = 0.4;
+    c.approach.standoff_m = 0.7;
+    c.executor.nav_to_object.arrival.radius_m = 0.3;
+    c.executor.explore.arrival.radius_m = 0.5;
+    c
+}
+
+/// The semantic sensor's vocabulary for one scene: every category of the
+/// scene becomes a label; building structure is ignored for objects.
+///
+/// Label 0 is `unknown` (pixels without an instance), ids from 1 follow the
+/// sorted category names, so the table depends only on the scene's set of
+/// categories.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneLabels {
+    entries: Vec<LabelEntry>,
+    /// Label of each instance id (index = instance id).
+    by_instance: Vec<LabelId>,
+}
+
+impl SceneLabels {
+    /// The table of `scene`.
+    pub fn of(scene: &Scene) -> Self {
+        let mut categories: BTreeMap<&str, bool> = BTreeMap::new();
+        for inst in scene.instances() {
+            let ignored = inst.kind != InstanceKind::Object;
+            let e = categories.entry(inst.category.as_str()).or_insert(ignored);
+            // A category used by objects and structure alike stays an object.
+            *e &= ignored;
+        }
+        let mut entries = vec![LabelEntry {
+            id: 0,
+            name: "unknown".to_owned(),
+            ignored: true,
+        }];
+        let mut ids: BTreeMap<&str, LabelId> = BTreeMap::new();
+        for (k, (name, ignored)) in categories.iter().enumerate() {
+            let Ok(id) = u16::try_from(k + 1) else { break };
+            if name.is_empty() || *name == "unknown" {
+                continue;
+            }
+            ids.insert(name, LabelId(id));
+            entries.push(LabelEntry {
+                id,
+                name: (*name).to_owned(),
+                ignored: *ignored,
+            });
+        }
+        let by_instance = scene
+            .instances()
+            .iter()
+            .map(|i| ids.get(i.category.as_str()).copied().unwrap_or_default())
+            .collect();
+        Self {
+            entries,
+            by_instance,
+        }
+    }
+
+    /// The label entries for [`AgentConfig::labels`].
+    pub fn entries(&self) -> &[LabelEntry] {
+        &self.entries
+    }
+
+    /// The label of a pixel's instance id (`unknown` for none).
+    pub fn label(&self, instance: u32) -> LabelId {
+        if instance == NO_INSTANCE {
+            return LabelId(0);
+        }
+        self.by_instance
+            .get(instance as usize)
+            .copied()
+            .unwrap_or_default()
+    }
+}
+
+/// Builds the agent for one episode (the maps start empty every episode,
+/// as in Habitat).
+pub trait AgentFactory: Send + Sync {
+    /// A fresh agent whose label vocabulary is `labels`.
+    ///
+    /// # Errors
+    /// The agent's construction errors.
+    fn build(&self, labels: &[LabelEntry]) -> Result<Agent, AgentError>;
+}
+
+impl<T: AgentFactory + ?Sized> AgentFactory for &T {
+    fn build(&self, labels: &[LabelEntry]) -> Result<Agent, AgentError> {
+        (**self).build(labels)
+    }
+}
+
+/// An [`AgentFactory`] from a configuration, with an optional policy
+/// constructor (for example an LLM policy over a record/replay transport).
+pub struct ConfigFactory {
+    /// The configuration (its `labels` are replaced by the scene's).
+    pub config: AgentConfig,
+    /// Builds the context policy; `None` uses `config.policy`.
+    #[allow(clippy::type_complexity)]
+    pub policy: Option<Box<dyn Fn() -> Result<BoxedPolicy, AgentError> + Send + Sync>>,
+}
+
+impl std::fmt::Debug for ConfigFactory {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ConfigFactory")
+            .field("config", &self.config)
+            .field("policy", &self.policy.is_some())
+            .finish()
+    }
+}
+
+impl AgentFactory for ConfigFactory {
+    fn build(&self, labels: &[LabelEntry]) -> Result<Agent, AgentError> {
+        let mut config = self.config.clone();
+        config.labels = labels.to_vec();
+        match &self.policy {
+            Some(make) => Agent::with_policy(config, make()?),
+            None => Agent::new(config),
+        }
+    }
+}
+
+/// What the adapter measured and logged during one episode.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct EpisodeTrace {
+    /// Decision latency (observe + step) of every action, ms.
+    pub decision_ms: Histogram,
+    /// Time between consecutive decisions spent outside the agent (render
+    /// + simulator bookkeeping), ms.
+    pub frame_ms: Histogram,
+    /// Feet positions at every observation (world, z up), starting with
+    /// the spawn pose.
+    pub trajectory: Vec<[f32; 3]>,
+    /// Where relocations were dispatched: (action index, robot position,
+    /// relocation waypoint).
+    pub relocations: Vec<(usize, [f32; 2], [f32; 2])>,
+    /// Where the agent verified a candidate: (action index, candidate
+    /// centre).
+    pub verifications: Vec<(usize, [f32; 3])>,
+    /// The decision log, with runs of identical decisions merged.
+    pub decisions: DecisionLog,
+    /// Agent errors (observation refused, step failed), counted.
+    pub errors: Vec<String>,
+    /// How the agent ended the episode: `stop` (target confirmed),
+    /// `exhausted`, or empty while running / for budget ends.
+    pub agent_end: String,
+    /// Collisions reported by the motion layer.
+    pub collisions: usize,
+    /// Missions reported blocked or without a path by the motion layer.
+    pub blocked_missions: usize,
+    /// Missions dispatched.
+    pub missions: usize,
+}
+
+/// The mission being executed.
+#[derive(Debug, Clone)]
+struct ActiveMission {
+    id: MissionId,
+    waypoint: Point3<f64>,
+    look_at: Option<Point3<f64>>,
+    path: Vec<Point2<f64>>,
+    next: usize,
+    planned_at: usize,
+    collisions: usize,
+}
+
+/// SOR-Nav on platform-sim: a [`Policy`] around the [`Agent`].
+pub struct SornavPolicy<F> {
+    factory: F,
+    config: AdapterConfig,
+    agent: Option<Agent>,
+    labels: Option<SceneLabels>,
+    camera: Option<(PinholeCamera, f64)>,
+    target: String,
+    floor_z: f64,
+    mission: Option<ActiveMission>,
+    blocked: HashSet<(i32, i32, i32)>,
+    last: Option<(Point3<f64>, f64, Action)>,
+    last_act_end: Option<Instant>,
+    exhausted_turns: usize,
+    turn_rad: f64,
+    turns: i32,
+    forward_m: f64,
+    trace: EpisodeTrace,
+}
+
+impl<F> std::fmt::Debug for SornavPolicy<F> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SornavPolicy")
+            .field("config", &self.config)
+            .field("target", &self.target)
+            .finish_non_exhaustive()
+    }
+}
+
+fn wrap(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let r = (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI;
+    if r.is_finite() { r } else { 0.0 }
+}
+
+fn f32x3(p: &Point3<f64>) -> [f32; 3] {
+    [p.x as f32, p.y as f32, p.z as f32]
+}
+
+impl<F: AgentFactory> SornavPolicy<F> {
+    /// A policy that builds its agent with `factory` at every episode start.
+    pub fn new(factory: F, config: AdapterConfig) -> Self {
+        Self {
+            factory,
+            config,
+            agent: None,
+            labels: None,
+            camera: None,
+            target: String::new(),
+            floor_z: 0.0,
+            mission: None,
+            blocked: HashSet::new(),
+            last: None,
+            last_act_end: None,
+            exhausted_turns: 0,
+            turn_rad: 30f64.to_radians(),
+            turns: 12,
+            forward_m: 0.25,
+            trace: EpisodeTrace::default(),
+        }
+    }
+
+    /// The agent of the current episode.
+    pub fn agent(&self) -> Option<&Agent> {
+        self.agent.as_ref()
+    }
+
+    /// What was measured during the last episode.
+    pub fn trace(&self) -> &EpisodeTrace {
+        &self.trace
+    }
+
+    /// Takes the trace of the last episode.
+    pub fn take_trace(&mut self) -> EpisodeTrace {
+        std::mem::take(&mut self.trace)
+    }
+
+    fn error(&mut self, context: &str, e: &AgentError) {
+        // Keep the log bounded: the first few messages, then only a count.
+        if self.trace.errors.len() < 20 {
+            self.trace.errors.push(format!("{context}: {e}"));
+        }
+    }
+
+    fn to_local(&self, p: &Point3<f64>) -> Point3<f64> {
+        Point3::new(p.x, p.y, p.z - self.floor_z)
+    }
+
+    /// The agent's observation of a simulator frame.
+    fn observation(&self, obs: &sornav_platform_sim::Observation<'_>) -> Option<Observation> {
+        let frame = obs.frame?;
+        let (camera, mount) = self.camera.as_ref()?;
+        let labels = self.labels.as_ref()?;
+        let feet = self.to_local(&obs.position);
+        let eye = Point3::new(feet.x, feet.y, feet.z + mount);
+        Some(Observation {
+            pose: RobotPose::new(feet, obs.yaw),
+            sensor: Sensor::Depth(DepthObservation {
+                camera: *camera,
+                // The simulator's pitch is positive up; the optical pose
+                // takes a downward tilt.
+                camera_pose: optical_pose(&eye, obs.yaw, -obs.pitch),
+                depth: frame.depth.clone(),
+                labels: frame.instance.iter().map(|&i| labels.label(i)).collect(),
+            }),
+        })
+    }
+
+    fn now(&self, step: usize) -> Duration {
+        Duration::from_secs_f64(step as f64 * self.config.seconds_per_action.max(0.0))
+    }
+
+    /// Turn (the shorter way) toward a heading error; `None` when within
+    /// the tolerance.
+    fn turn_toward(&self, error: f64) -> Option<Action> {
+        let tol = self.config.heading_tolerance_deg.to_radians();
+        if error.abs() <= tol {
+            None
+        } else if error > 0.0 {
+            Some(Action::TurnLeft)
+        } else {
+            Some(Action::TurnRight)
+        }
+    }
+
+    fn report(&mut self, id: MissionId, reason: FailureReason) {
+        self.trace.blocked_missions += 1;
+        if let Some(agent) = self.agent.as_mut() {
+            // The agent may have moved on already (unknown mission): fine.
+            let _ = agent.on_mission_outcome(id, MissionStatus::Failed(reason));
+        }
+        self.mission = None;
+    }
+
+    fn replan(&mut self, from: &Point3<f64>, step: usize) {
+        let Some(m) = self.mission.as_mut() else {
+            return;
+        };
+        let Some(agent) = self.agent.as_mut() else {
+            return;
+        };
+        m.planned_at = step;
+        match agent.plan_path(from, &m.waypoint) {
+            Ok(Some(path)) => {
+                m.path = path.iter().map(|p| Point2::new(p.x, p.y)).collect();
+                m.next = 0;
+            }
+            Ok(None) => {
+                // Not connected on the agent's map (any more).
+                let id = m.id;
+                self.report(id, FailureReason::PathInvalidated);
+            }
+            Err(e) => self.error("plan_path", &e),
+        }
+    }
+
+    /// Adopts a dispatched or continued mission.
+    fn adopt(&mut self, id: MissionId, step: usize) {
+        if self.mission.as_ref().is_some_and(|m| m.id == id) {
+            return;
+        }
+        let Some((active, mission)) = self.agent.as_ref().and_then(|a| a.active_mission()) else {
+            self.mission = None;
+            return;
+        };
+        if active != id {
+            self.mission = None;
+            return;
+        }
+        self.trace.missions += 1;
+        let path: Vec<Point2<f64>> = mission
+            .path
+            .as_ref()
+            .map(|p| p.iter().map(|q| Point2::new(q.x, q.y)).collect())
+            .unwrap_or_default();
+        self.mission = Some(ActiveMission {
+            id,
+            waypoint: mission.waypoint,
+            look_at: mission.look_at,
+            path,
+            next: 0,
+            planned_at: step,
+            collisions: 0,
+        });
+    }
+
+    /// One action toward the active mission's waypoint.
+    fn follow(&mut self, feet: &Point3<f64>, yaw: f64, step: usize) -> Action {
+        let stale = self
+            .mission
+            .as_ref()
+            .is_some_and(|m| m.path.is_empty() || step >= m.planned_at + self.config.replan_every);
+        if stale {
+            self.replan(feet, step);
+        }
+        let Some(m) = self.mission.as_mut() else {
+            // No mission: look around (observing) until the agent decides.
+            return Action::TurnLeft;
+        };
+        let here = Point2::new(feet.x, feet.y);
+        let goal = Point2::new(m.waypoint.x, m.waypoint.y);
+        if (goal - here).norm() < self.config.path_point_radius_m {
+            // At the waypoint; the agent detects arrival from the pose. A
+            // NAV_TO_OBJECT mission must also face its object.
+            if let Some(look) = m.look_at {
+                let e = wrap((look.y - here.y).atan2(look.x - here.x) - yaw);
+                if let Some(turn) = self.turn_toward(e) {
+                    return turn;
+                }
+            }
+            return Action::TurnLeft;
+        }
+        let target = lookahead(&m.path, &mut m.next, &here, goal, self.config.lookahead_m);
+        let Some(agent) = self.agent.as_ref() else {
+            return Action::Stop;
+        };
+        let grid = agent.frontier_map().grid();
+        let heading = |k: i32| yaw + f64::from(k) * self.turn_rad;
+        let cell = |p: &Point2<f64>| grid.cell_of(p).ok();
+        let mut best: Option<(f64, i32)> = None;
+        for k in -(self.turns / 2 - 1)..=(self.turns / 2) {
+            let (s, c) = heading(k).sin_cos();
+            let end = here + nalgebra::Vector2::new(c, s) * self.forward_m;
+            let key = blocked_key(&here, heading(k));
+            if self.blocked.contains(&key) {
+                continue;
+            }
+            // The forward segment must stay on the agent's traversable map
+            // (the start cell may be inside the inflation margin).
+            let samples = (self.forward_m / (grid.resolution() / 2.0)).ceil().max(1.0) as usize;
+            let start_cell = cell(&here);
+            let free = (1..=samples).all(|i| {
+                let q = here + (end - here) * (i as f64 / samples as f64);
+                cell(&q).is_some_and(|cq| Some(cq) == start_cell || grid.is_traversable(cq))
+            });
+            if !free {
+                continue;
+            }
+            let score = (target - end).norm() + 0.01 * f64::from(k.abs());
+            if best.is_none_or(|(b, _)| score < b) {
+                best = Some((score, k));
+            }
+        }
+        match best {
+            Some((_, 0)) => Action::MoveForward,
+            Some((_, k)) if k > 0 => Action::TurnLeft,
+            Some(_) => Action::TurnRight,
+            // Boxed in on the agent's map (inside an inflation margin, or
+            // every heading blocked before): head for the target directly.
+            None => {
+                let d = target - here;
+                let e = wrap(d.y.atan2(d.x) - yaw);
+                self.turn_toward(e).unwrap_or(Action::MoveForward)
+            }
+        }
+    }
+
+    /// Bookkeeping of the previous action's effect (collisions).
+    fn after_last_action(&mut self, feet: &Point3<f64>, yaw: f64, step: usize) {
+        let Some((before, before_yaw, action)) = self.last else {
+            return;
+        };
+        if action != Action::MoveForward {
+            return;
+        }
+        let blocked = (feet - before).norm() < 1e-6;
+        if !blocked {
+            if let Some(m) = self.mission.as_mut() {
+                m.collisions = 0;
+            }
+            return;
+        }
+        let _ = yaw;
+        self.trace.collisions += 1;
+        // Remember the blocked move so that it is not tried again.
+        self.blocked
+            .insert(blocked_key(&Point2::new(before.x, before.y), before_yaw));
+        let max = self.config.max_collisions;
+        let Some(m) = self.mission.as_mut() else {
+            return;
+        };
+        m.collisions += 1;
+        let (k, id) = (m.collisions, m.id);
+        if k >= max {
+            self.report(id, FailureReason::Stuck { progress_m: 0.0 });
+            return;
+        }
+        // Re-plan on the updated map.
+        self.replan(feet, step);
+    }
+}
+
+/// Key of a (position, heading) move for the blocked-move memory: the
+/// position on a 5 cm lattice and the heading in 10-degree sectors.
+fn blocked_key(p: &Point2<f64>, heading: f64) -> (i32, i32, i32) {
+    let sector = (wrap(heading).to_degrees() / 10.0).round() as i32;
+    (
+        (p.x / 0.05).round() as i32,
+        (p.y / 0.05).round() as i32,
+        sector.rem_euclid(36),
+    )
+}
+
+/// The pure-pursuit target on `path`: the point `lookahead` metres further
+/// along the path than the path point closest to `here` (searched from
+/// segment `next` on; `next` advances), or `goal` beyond the path's end.
+fn lookahead(
+    path: &[Point2<f64>],
+    next: &mut usize,
+    here: &Point2<f64>,
+    goal: Point2<f64>,
+    lookahead: f64,
+) -> Point2<f64> {
+    if path.len() < 2 {
+        return goal;
+    }
+    // Closest point on the remaining segments (bounded search window).
+    let first = (*next).min(path.len() - 2);
+    let mut best = (f64::INFINITY, first, 0.0);
+    for i in first..(path.len() - 1).min(first + 8) {
+        let (a, b) = (path[i], path[i + 1]);
+        let ab = b - a;
+        let len2 = ab.norm_squared();
+        let t = if len2 > 0.0 {
+            ((here - a).dot(&ab) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let d = (a + ab * t - here).norm();
+        if d < best.0 {
+            best = (d, i, t);
+        }
+    }
+    let (_, mut i, t) = best;
+    *next = i;
+    let mut at = path[i] + (path[i + 1] - path[i]) * t;
+    let mut left = lookahead;
+    loop {
+        let seg = (path[i + 1] - at).norm();
+        if seg >= left {
+            return at + (path[i + 1] - at) * (left / seg.max(1e-12));
+        }
+        left -= seg;
+        at = path[i + 1];
+        i += 1;
+        if i + 1 >= path.len() {
+            return if (goal - at).norm() <= left { goal } else { at };
+        }
+    }
+}
+
+impl<F: AgentFactory> Policy for SornavPolicy<F> {
+    fn reset(&mut self, sim: &Simulator, episode: &Episode) {
+        let labels = SceneLabels::of(sim.scene());
+        let camera = sim.camera().config();
+        self.camera = Some((
+            PinholeCamera::from_hfov(camera.width, camera.height, camera.hfov_deg.to_radians()),
+            camera.mount_height,
+        ));
+        self.trace = EpisodeTrace::default();
+        self.floor_z = episode.start_position.z;
+        self.mission = None;
+        self.blocked.clear();
+        self.last = None;
+        self.last_act_end = None;
+        self.exhausted_turns = 0;
+        let motion = &sim.config().agent;
+        self.turn_rad = motion.turn_deg.to_radians();
+        self.turns = (360.0 / motion.turn_deg).round().max(2.0) as i32;
+        self.forward_m = motion.forward_step;
+        self.target = episode.object_category.clone();
+        self.agent = match self.factory.build(labels.entries()) {
+            Ok(mut agent) => match agent.set_target(&episode.object_category) {
+                Ok(_) => Some(agent),
+                Err(e) => {
+                    self.error("set_target", &e);
+                    None
+                }
+            },
+            Err(e) => {
+                self.error("build", &e);
+                None
+            }
+        };
+        self.labels = Some(labels);
+    }
+
+    fn act(&mut self, obs: &sornav_platform_sim::Observation<'_>) -> Action {
+        let step = obs.step;
+        if let Some(t) = self.last_act_end.take() {
+            self.trace.frame_ms.add(t.elapsed().as_secs_f64() * 1e3);
+        }
+        self.trace.trajectory.push(f32x3(&obs.position));
+        let feet = self.to_local(&obs.position);
+        self.after_last_action(&feet, obs.yaw, step);
+        let action = self.decide(obs, &feet, step);
+        self.last = Some((feet, obs.yaw, action));
+        self.last_act_end = Some(Instant::now());
+        action
+    }
+}
+
+impl<F: AgentFactory> SornavPolicy<F> {
+    fn decide(
+        &mut self,
+        obs: &sornav_platform_sim::Observation<'_>,
+        feet: &Point3<f64>,
+        step: usize,
+    ) -> Action {
+        if self.agent.is_none() {
+            // The agent could not be built: nothing sensible to do.
+            return Action::Stop;
+        }
+        let t0 = Instant::now();
+        let observation = self.observation(obs);
+        if let Some(o) = &observation
+            && let Some(agent) = self.agent.as_mut()
+            && let Err(e) = agent.observe(o)
+        {
+            self.error("observe", &e);
+        }
+        if step < self.config.scan_turns {
+            self.trace.decision_ms.add(t0.elapsed().as_secs_f64() * 1e3);
+            return Action::TurnLeft;
+        }
+        let now = self.now(step);
+        let command = self.agent.as_mut().map(|a| a.step(now));
+        if let Some(agent) = self.agent.as_mut() {
+            self.trace.decisions.extend(agent.take_decisions());
+        }
+        self.trace.decision_ms.add(t0.elapsed().as_secs_f64() * 1e3);
+        let command = match command {
+            Some(Ok(c)) => c,
+            Some(Err(e)) => {
+                self.error("step", &e);
+                return Action::TurnLeft;
+            }
+            None => return Action::Stop,
+        };
+        let yaw = obs.yaw;
+        match command {
+            AgentCommand::Dispatch { id, mission } => {
+                self.exhausted_turns = 0;
+                if let MissionKind::Relocate { .. } = mission.kind {
+                    self.trace.relocations.push((
+                        step,
+                        [feet.x as f32, feet.y as f32],
+                        [mission.waypoint.x as f32, mission.waypoint.y as f32],
+                    ));
+                }
+                // A re-dispatch with a new waypoint replaces the old one.
+                if std::env::var_os("SORNAV_DEBUG").is_some() {
+                    let last = self.agent.as_ref().map(|a| a.snapshot().last_outcome);
+                    eprintln!(
+                        "step {step} at ({:.2},{:.2}) yaw {:.0} dispatch {id:?} {} wp ({:.2},{:.2}) path {} last {:?}",
+                        feet.x,
+                        feet.y,
+                        obs.yaw.to_degrees(),
+                        mission.kind.name(),
+                        mission.waypoint.x,
+                        mission.waypoint.y,
+                        mission.path.as_ref().map_or(0, Vec::len),
+                        last
+                    );
+                }
+                self.mission = None;
+                self.adopt(id, step);
+                self.follow(feet, yaw, step)
+            }
+            AgentCommand::Continue { mission: Some(id) } => {
+                self.adopt(id, step);
+                self.follow(feet, yaw, step)
+            }
+            AgentCommand::Continue { mission: None } => {
+                self.mission = None;
+                Action::TurnLeft
+            }
+            AgentCommand::Verify { look_at, .. } => {
+                self.mission = None;
+                self.trace.verifications.push((step, f32x3(&look_at)));
+                // Face the candidate; when already facing it, turn toward
+                // its side (it stays within half the 79-degree field of
+                // view) so that the next frame is a fresh observation.
+                let e = wrap((look_at.y - feet.y).atan2(look_at.x - feet.x) - yaw);
+                self.turn_toward(e).unwrap_or(if e >= 0.0 {
+                    Action::TurnLeft
+                } else {
+                    Action::TurnRight
+                })
+            }
+            AgentCommand::Stop { .. } => {
+                self.trace.agent_end = "stop".to_owned();
+                Action::Stop
+            }
+            AgentCommand::Exhausted => {
+                // Look all around once more before giving up: the camera
+                // may not have seen the floor next to the robot.
+                if self.exhausted_turns < self.turns as usize {
+                    self.exhausted_turns += 1;
+                    Action::TurnLeft
+                } else {
+                    self.trace.agent_end = "exhausted".to_owned();
+                    Action::Stop
+                }
+            }
+        }
+    }
+}

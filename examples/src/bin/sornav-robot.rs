@@ -1,0 +1,109 @@
+//! `sornav-robot`: the SOR-Nav agent on an AgileX Scout Mini with the CMU
+//! autonomy stack, over ROS 2 (pure Rust: ros2-client + RustDDS).
+//!
+//! ```text
+//! sornav-robot --config scout_mini.toml [--target "find the toilet"] [--domain-id N]
+//! sornav-robot --print-config      # the committed example configuration
+//! ```
+//!
+//! Loads the Scout TOML, subscribes to the CMU stack's odometry, registered
+//! scan, terrain map, the labelled `/semantic_scan` and `/sornav/target`,
+//! runs the agent at the configured control rate (1 Hz) and publishes
+//! `/way_point`, `/joy` (autonomy mode), `/sornav/status`,
+//! `/sornav/markers` and `/sornav/path`. New requests on `/sornav/target`
+//! start a new search with the maps kept. Ctrl-C holds the robot, publishes
+//! `/stop = 2` and exits. See docs/ROBOT.md.
+
+#![forbid(unsafe_code)]
+
+use std::path::PathBuf;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use clap::Parser;
+use sornav_platform_scout::config::ScoutConfig;
+use sornav_platform_scout::node::RobotNode;
+
+/// Command line.
+#[derive(Debug, Parser)]
+#[command(
+    version,
+    about = "SOR-Nav on a Scout Mini with the CMU autonomy stack (ROS 2)"
+)]
+struct Args {
+    /// Robot configuration (TOML); default: the committed Scout Mini example.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// Target to search at start (overrides `initial_target`).
+    #[arg(long)]
+    target: Option<String>,
+    /// ROS domain id (overrides `ros.domain_id`).
+    #[arg(long)]
+    domain_id: Option<u16>,
+    /// Print the example configuration and exit.
+    #[arg(long)]
+    print_config: bool,
+    /// Print the status JSON every this many seconds (0: never).
+    #[arg(long, default_value_t = 5.0)]
+    status_every_s: f64,
+}
+
+fn main() {
+    if let Err(e) = run() {
+        eprintln!("sornav-robot: {e}");
+        std::process::exit(1);
+    }
+}
+
+fn run() -> Result<(), String> {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let args = Args::parse();
+    if args.print_config {
+        print!("{}", ScoutConfig::EXAMPLE);
+        return Ok(());
+    }
+    let mut config = match &args.config {
+        Some(path) => ScoutConfig::from_toml_file(path).map_err(|e| e.to_string())?,
+        None => ScoutConfig::from_toml(ScoutConfig::EXAMPLE).map_err(|e| e.to_string())?,
+    };
+    if let Some(t) = args.target {
+        config.initial_target = Some(t);
+    }
+    if let Some(d) = args.domain_id {
+        config.ros.domain_id = d;
+    }
+    config.validate().map_err(|e| e.to_string())?;
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
+            .map_err(|e| e.to_string())?;
+    }
+    let mut robot = RobotNode::new(config).map_err(|e| e.to_string())?;
+    tracing::info!("sornav-robot running; Ctrl-C to stop");
+    let every = (args.status_every_s > 0.0).then(|| Duration::from_secs_f64(args.status_every_s));
+    let mut last_print = robot.now();
+    robot.start();
+    while !stop.load(Ordering::SeqCst) {
+        robot.spin_once();
+        if let Some(every) = every
+            && robot.now().saturating_sub(last_print) >= every
+        {
+            last_print = robot.now();
+            let status = robot.bridge().status(last_print);
+            eprintln!("{}", serde_json::to_string(&status).unwrap_or_default());
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    tracing::info!("stopping: holding the robot and publishing /stop = 2");
+    robot.shutdown(Duration::from_millis(500));
+    let status = robot.bridge().status(robot.now());
+    println!("{}", serde_json::to_string(&status).unwrap_or_default());
+    Ok(())
+}

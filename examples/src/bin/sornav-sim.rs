@@ -1,0 +1,313 @@
+//! `sornav-sim`: runs SOR-Nav and the baselines on the CPU simulator and
+//! writes `summary.json`, `episodes.jsonl`, `report.md` and figures.
+//!
+//! With no arguments it runs the main job: the full system on a built-in set
+//! of procedural houses. See `sornav-sim --help` and the README.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Args, Parser, Subcommand};
+use sornav::AgentConfig;
+use sornav::supervisor::LlmConfig;
+use sornav_examples::adapter::{AdapterConfig, sim_agent_config};
+use sornav_examples::harness::{
+    self, EpisodeSource, EvalConfig, LlmSettings, RunOptions, VARIANTS,
+};
+use sornav_examples::report;
+use sornav_examples::scenes::parse_scene_spec;
+use sornav_examples::summary::summarize;
+use sornav_platform_sim::{CameraConfig, RunConfig};
+
+/// Run ObjectNav evaluations of SOR-Nav and its baselines on the CPU
+/// simulator (procedural houses, Sweet Home 3D homes, glTF scenes).
+#[derive(Debug, Parser)]
+#[command(name = "sornav-sim", version, about, long_about = None)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+    #[command(flatten)]
+    run: RunArgs,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Merge the output directories of shards (`--shard i/n` runs) of one
+    /// evaluation into one report.
+    Merge {
+        /// Output directory of the merged evaluation.
+        #[arg(long)]
+        out: PathBuf,
+        /// The shards' output directories.
+        #[arg(required = true)]
+        shards: Vec<PathBuf>,
+    },
+}
+
+#[derive(Debug, Args)]
+struct RunArgs {
+    /// Scenes (repeatable): `procedural:N`, `procedural-shuffled:N`, a Sweet
+    /// Home 3D `.xml` / `.sh3d` file or a directory of them, a `.glb` /
+    /// `.gltf`. Default: `procedural:12`.
+    #[arg(long = "scenes", value_name = "SPEC")]
+    scenes: Vec<String>,
+    /// Sweet Home 3D model directory (default
+    /// `../shared/data/sh3d-homes/models` when present).
+    #[arg(long, value_name = "DIR")]
+    models: Option<PathBuf>,
+    /// Episodes per scene, spread over the target categories present
+    /// (default 4 for the main job; unlimited when
+    /// `--episodes-per-category` is given).
+    #[arg(long, value_name = "N")]
+    episodes_per_scene: Option<usize>,
+    /// Generated episodes per target category present in a scene
+    /// (default 1, or 20 per category when only this is given).
+    #[arg(long, value_name = "N")]
+    episodes_per_category: Option<usize>,
+    /// Habitat ObjectNav JSON(.gz) episodes instead of generating; their
+    /// scene ids are matched to the `--scenes` by name.
+    #[arg(long, value_name = "FILE")]
+    episodes: Option<PathBuf>,
+    /// Target categories (comma-separated; default: HM3D's six).
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    categories: Vec<String>,
+    /// Variants (comma-separated): sornav, no-gate, nearest-frontier,
+    /// semantic-ranking, oracle. Default: sornav.
+    #[arg(long, value_delimiter = ',', value_name = "LIST")]
+    variants: Vec<String>,
+    /// Seed of scenes, episodes and sensor noise.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Parallel jobs (default: the machine's cores).
+    #[arg(long, value_name = "J")]
+    jobs: Option<usize>,
+    /// Output directory.
+    #[arg(long, value_name = "DIR", default_value = "out/sornav-sim")]
+    out: PathBuf,
+    /// Sensor width in pixels (Habitat: 640).
+    #[arg(long, value_name = "W", default_value_t = 640)]
+    width: u32,
+    /// Sensor height in pixels (Habitat: 480).
+    #[arg(long, value_name = "H", default_value_t = 480)]
+    height: u32,
+    /// OpenAI-compatible endpoint (base URL up to `/v1`) for the `sornav`
+    /// variant's LLM policy, instead of the embedded commonsense policy.
+    #[arg(long, value_name = "URL")]
+    llm: Option<String>,
+    /// Model name for `--llm`.
+    #[arg(long, value_name = "NAME", default_value = "gpt-4o-mini")]
+    llm_model: String,
+    /// Environment variable holding the API key for `--llm`.
+    #[arg(long, value_name = "VAR", default_value = "OPENAI_API_KEY")]
+    llm_key_env: String,
+    /// Record every LLM exchange to this JSONL file.
+    #[arg(long, value_name = "FILE")]
+    llm_record: Option<PathBuf>,
+    /// Replay LLM answers from a recording (offline, bit-for-bit).
+    #[arg(long, value_name = "FILE")]
+    llm_replay: Option<PathBuf>,
+    /// Run only shard `i` of `n` (`--shard 3/16`): work items k with
+    /// k mod n = i. Combine the shards with `sornav-sim merge`.
+    #[arg(long, value_name = "i/n", value_parser = parse_shard)]
+    shard: Option<(usize, usize)>,
+    /// Agent configuration (TOML, `sornav::AgentConfig`); variants change
+    /// its policy and frontier ordering.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Top-down maps: the first N episodes of every variant, plus up to N
+    /// episodes with relocations.
+    #[arg(long, value_name = "N", default_value_t = 4)]
+    maps: usize,
+    /// Action budget per episode.
+    #[arg(long, default_value_t = 500)]
+    max_actions: usize,
+    /// Wall-clock budget per episode (s).
+    #[arg(long, default_value_t = 120.0)]
+    wall_clock: f64,
+    /// Discard results already in `--out` instead of resuming.
+    #[arg(long)]
+    fresh: bool,
+    /// No progress bar.
+    #[arg(long)]
+    quiet: bool,
+}
+
+fn parse_shard(s: &str) -> Result<(usize, usize), String> {
+    let (i, n) = s.split_once('/').ok_or("expected i/n, e.g. 0/4")?;
+    let i: usize = i.trim().parse().map_err(|_| "i is not a number")?;
+    let n: usize = n.trim().parse().map_err(|_| "n is not a number")?;
+    if n == 0 || i >= n {
+        return Err(format!("need 0 <= i < n, got {i}/{n}"));
+    }
+    Ok((i, n))
+}
+
+fn default_models() -> Option<PathBuf> {
+    let p = std::env::var_os("SORNAV_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from("../shared"))
+        .join("data/sh3d-homes/models");
+    p.is_dir().then_some(p)
+}
+
+fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
+    let specs = if a.scenes.is_empty() {
+        vec!["procedural:12".to_owned()]
+    } else {
+        a.scenes.clone()
+    };
+    let mut scenes = Vec::new();
+    for s in &specs {
+        scenes.extend(parse_scene_spec(s, a.seed).map_err(|e| e.to_string())?);
+    }
+    let episodes = match &a.episodes {
+        Some(path) => EpisodeSource::File { path: path.clone() },
+        None => EpisodeSource::Generate {
+            per_category: a
+                .episodes_per_category
+                .unwrap_or(if a.episodes_per_scene.is_some() {
+                    20
+                } else {
+                    1
+                }),
+            per_scene: match (a.episodes_per_scene, a.episodes_per_category) {
+                (Some(n), _) => Some(n),
+                (None, Some(_)) => None,
+                (None, None) => Some(4),
+            },
+        },
+    };
+    let categories = if a.categories.is_empty() {
+        sornav_platform_sim::category::HM3D_GOALS
+            .iter()
+            .map(|c| (*c).to_owned())
+            .collect()
+    } else {
+        a.categories.clone()
+    };
+    let variants = if a.variants.is_empty() {
+        vec!["sornav".to_owned()]
+    } else {
+        a.variants.clone()
+    };
+    for v in &variants {
+        if !VARIANTS.contains(&v.as_str()) {
+            return Err(format!(
+                "unknown variant '{v}' (known: {})",
+                VARIANTS.join(", ")
+            ));
+        }
+    }
+    let agent = match &a.config {
+        Some(path) => AgentConfig::from_toml_file(path).map_err(|e| e.to_string())?,
+        None => sim_agent_config(),
+    };
+    let llm = a.llm.as_ref().map(|url| LlmSettings {
+        config: LlmConfig {
+            base_url: url.clone(),
+            model: a.llm_model.clone(),
+            api_key_env: Some(a.llm_key_env.clone()),
+            ..LlmConfig::default()
+        },
+        record: a.llm_record.clone(),
+        replay: a.llm_replay.clone(),
+    });
+    if a.llm.is_none() && (a.llm_record.is_some() || a.llm_replay.is_some()) {
+        return Err("--llm-record / --llm-replay need --llm URL".into());
+    }
+    Ok(EvalConfig {
+        scenes,
+        models: a.models.clone().or_else(default_models),
+        episodes,
+        categories,
+        variants,
+        seed: a.seed,
+        camera: CameraConfig {
+            width: a.width,
+            height: a.height,
+            ..CameraConfig::default()
+        },
+        run: RunConfig {
+            max_actions: a.max_actions,
+            wall_clock_s: a.wall_clock,
+            ..RunConfig::default()
+        },
+        adapter: AdapterConfig::default(),
+        agent,
+        llm,
+        maps: a.maps,
+    })
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| {
+                tracing_subscriber::EnvFilter::new("warn,sornav_examples=info")
+            }),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    match cli.command {
+        Some(Command::Merge { out, shards }) => match harness::merge(&out, &shards) {
+            Ok(report_path) => {
+                let records =
+                    harness::read_records(&out.join("episodes.jsonl")).unwrap_or_default();
+                let config: Option<EvalConfig> = std::fs::read_to_string(out.join("run.json"))
+                    .ok()
+                    .and_then(|t| serde_json::from_str(&t).ok());
+                if let Some(c) = config {
+                    println!("{}", report::table(&summarize(&records, &c.variants)));
+                }
+                println!(
+                    "merged {} records; report: {}",
+                    records.len(),
+                    report_path.display()
+                );
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("sornav-sim merge: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        None => {
+            let config = match eval_config(&cli.run) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("sornav-sim: {e}");
+                    return ExitCode::from(2);
+                }
+            };
+            let options = RunOptions {
+                out: cli.run.out.clone(),
+                jobs: cli.run.jobs.unwrap_or_else(|| {
+                    std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+                }),
+                shard: cli.run.shard,
+                fresh: cli.run.fresh,
+                progress: !cli.run.quiet,
+            };
+            match harness::run(&config, &options) {
+                Ok(outcome) => {
+                    let records = harness::read_records(&options.out.join("episodes.jsonl"))
+                        .unwrap_or_default();
+                    println!("{}", report::table(&summarize(&records, &config.variants)));
+                    println!(
+                        "{} episodes run ({} already done) in {:.1} s; report: {}",
+                        outcome.ran,
+                        outcome.skipped,
+                        outcome.wall_s,
+                        outcome.report.display()
+                    );
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("sornav-sim: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,839 @@
+//! The evaluation harness behind `sornav-sim`: scenes, episodes, variants,
+//! parallel runs with resume and sharding, and the output directory.
+//!
+//! An evaluation is described by an [`EvalConfig`] (everything that decides
+//! the results; written to `run.json`) and run with [`RunOptions`] (how:
+//! jobs, shard, output directory). Every (variant, episode) pair is one
+//! work item; results are appended to `episodes.jsonl` as they finish, so a
+//! run that is interrupted resumes where it stopped, and shards of one
+//! evaluation ([`RunOptions::shard`]) are combined by [`merge`].
+
+use std::collections::{BTreeSet, HashSet};
+use std::fs::{File, OpenOptions};
+use std::io::{BufRead, BufReader, Write};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Instant;
+
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use sornav::supervisor::LlmConfig;
+use sornav::supervisor::llm::transport::{
+    HttpTransport, RecordingTransport, ReplayTransport, Transport,
+};
+use sornav::{AgentConfig, AgentError, BoxedPolicy, PolicyConfig, Variant};
+use sornav_platform_sim::episodes::{GeneratorConfig, HabitatDataset, generate_episodes};
+use sornav_platform_sim::{CameraConfig, Episode, Oracle, RunConfig, Simulator, run_episode};
+
+use crate::adapter::{AdapterConfig, ConfigFactory, EpisodeTrace, SornavPolicy};
+use crate::record::EpisodeRecord;
+use crate::report::{self, ReportError};
+use crate::scenes::{SceneSource, SceneSpecError};
+use crate::topdown::TopDownMap;
+
+/// Errors of an evaluation.
+#[derive(Debug, thiserror::Error)]
+pub enum HarnessError {
+    /// A scene could not be used.
+    #[error(transparent)]
+    Scene(#[from] SceneSpecError),
+    /// A file could not be read or written.
+    #[error("{path}: {message}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The system's message.
+        message: String,
+    },
+    /// `episodes.jsonl` or `run.json` is malformed.
+    #[error("{path}, line {line}: {message}")]
+    Malformed {
+        /// The file.
+        path: PathBuf,
+        /// Line number (1-based; 0 for a whole-file problem).
+        line: usize,
+        /// What is wrong.
+        message: String,
+    },
+    /// The output directory holds a different evaluation.
+    #[error(
+        "{0} holds results of a different evaluation (run.json differs); use another --out, or --fresh to discard them"
+    )]
+    DifferentRun(PathBuf),
+    /// Invalid settings.
+    #[error("invalid settings: {0}")]
+    Config(String),
+    /// Episode generation or reading failed.
+    #[error("episodes of {scene}: {message}")]
+    Episodes {
+        /// The scene.
+        scene: String,
+        /// Why.
+        message: String,
+    },
+    /// The agent could not be configured.
+    #[error(transparent)]
+    Agent(#[from] AgentError),
+    /// Writing the report failed.
+    #[error(transparent)]
+    Report(#[from] ReportError),
+}
+
+fn io_err(path: &Path, e: impl std::fmt::Display) -> HarnessError {
+    HarnessError::Io {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+    }
+}
+
+/// Where episodes come from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum EpisodeSource {
+    /// Generated per scene following Habitat's dataset procedure.
+    Generate {
+        /// Episodes per target category present in a scene.
+        per_category: usize,
+        /// At most this many episodes per scene (spread over the
+        /// categories), when set.
+        per_scene: Option<usize>,
+    },
+    /// A Habitat ObjectNav JSON(.gz) file; its episodes' scene ids are
+    /// matched to the loaded scenes by name.
+    File {
+        /// The file.
+        path: PathBuf,
+    },
+}
+
+/// The LLM policy of the `sornav` variant.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LlmSettings {
+    /// Client configuration (base URL, model, timeout, ...).
+    pub config: LlmConfig,
+    /// Append every exchange to this JSONL file.
+    pub record: Option<PathBuf>,
+    /// Answer from this recording instead of the network.
+    pub replay: Option<PathBuf>,
+}
+
+/// Everything that decides an evaluation's results (`run.json`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct EvalConfig {
+    /// Scenes, in order.
+    pub scenes: Vec<SceneSource>,
+    /// Sweet Home 3D model directory.
+    pub models: Option<PathBuf>,
+    /// Episodes.
+    pub episodes: EpisodeSource,
+    /// Target categories.
+    pub categories: Vec<String>,
+    /// Variants, in table order.
+    pub variants: Vec<String>,
+    /// Seed of scene generation, episode generation and sensor noise.
+    pub seed: u64,
+    /// Camera (resolution, field of view, depth range).
+    pub camera: CameraConfig,
+    /// Episode rules (500 actions, 120 s).
+    pub run: RunConfig,
+    /// Agent command -> action adapter.
+    pub adapter: AdapterConfig,
+    /// Base agent configuration (variants change policy and ordering).
+    pub agent: AgentConfig,
+    /// LLM policy for the `sornav` variant, when set.
+    pub llm: Option<LlmSettings>,
+    /// Top-down maps: the first this many episodes of every variant, plus
+    /// up to this many episodes in which the agent relocated.
+    pub maps: usize,
+}
+
+/// How to run an evaluation (not part of its results).
+#[derive(Debug, Clone)]
+pub struct RunOptions {
+    /// Output directory.
+    pub out: PathBuf,
+    /// Parallel jobs (episodes in flight).
+    pub jobs: usize,
+    /// Run only work items `i` of `n` (`i < n`).
+    pub shard: Option<(usize, usize)>,
+    /// Discard earlier results in `out`.
+    pub fresh: bool,
+    /// Show a progress bar.
+    pub progress: bool,
+}
+
+/// What a run did.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// Work items of this run (after sharding).
+    pub items: usize,
+    /// Items already done before this run (resume).
+    pub skipped: usize,
+    /// Items run now.
+    pub ran: usize,
+    /// Wall time of this run (s).
+    pub wall_s: f64,
+    /// The report.
+    pub report: PathBuf,
+}
+
+/// The agent variants by name (`oracle` is the simulator's own).
+pub const VARIANTS: [&str; 5] = [
+    "sornav",
+    "no-gate",
+    "nearest-frontier",
+    "semantic-ranking",
+    "oracle",
+];
+
+impl EvalConfig {
+    /// Checks the settings.
+    ///
+    /// # Errors
+    /// [`HarnessError::Config`] naming the problem.
+    pub fn validate(&self) -> Result<(), HarnessError> {
+        let bad = |m: String| Err(HarnessError::Config(m));
+        if self.scenes.is_empty() {
+            return bad("no scenes".into());
+        }
+        if self.variants.is_empty() {
+            return bad("no variants".into());
+        }
+        for v in &self.variants {
+            if Variant::from_name(v).is_none() {
+                return bad(format!(
+                    "unknown variant '{v}' (known: {})",
+                    VARIANTS.join(", ")
+                ));
+            }
+        }
+        let unique: BTreeSet<&String> = self.variants.iter().collect();
+        if unique.len() != self.variants.len() {
+            return bad("a variant is listed twice".into());
+        }
+        let names: BTreeSet<String> = self.scenes.iter().map(SceneSource::name).collect();
+        if names.len() != self.scenes.len() {
+            return bad("two scenes have the same name".into());
+        }
+        if self.categories.is_empty() {
+            return bad("no target categories".into());
+        }
+        if let EpisodeSource::Generate {
+            per_category,
+            per_scene,
+        } = &self.episodes
+            && (*per_category == 0 || *per_scene == Some(0))
+        {
+            return bad("episodes per category / scene must be positive".into());
+        }
+        self.camera
+            .validate()
+            .map_err(|e| HarnessError::Config(format!("camera: {e}")))?;
+        for v in &self.variants {
+            if let Some(variant) = Variant::from_name(v)
+                && variant != Variant::Oracle
+            {
+                self.agent
+                    .clone()
+                    .with_variant(variant)
+                    .and_then(|c| c.validate())
+                    .map_err(|e| HarnessError::Config(format!("agent configuration: {e}")))?;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// A scene ready for episodes.
+struct LoadedScene {
+    name: String,
+    sim: Arc<Simulator>,
+    episodes: Vec<Episode>,
+}
+
+/// One (scene, episode, variant) run.
+#[derive(Debug, Clone, Copy)]
+struct WorkItem {
+    scene: usize,
+    episode: usize,
+    variant: usize,
+}
+
+/// The episode-generator seed of a scene: the evaluation seed mixed with
+/// the scene's name (FNV-1a), so that every scene gets its own episodes and
+/// adding scenes does not change the others'.
+pub fn generator_seed(seed: u64, scene: &str) -> u64 {
+    scene.bytes().fold(seed ^ 0x9e37_79b9_7f4a_7c15, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
+    })
+}
+
+/// The episodes of one scene.
+fn scene_episodes(
+    config: &EvalConfig,
+    sim: &Simulator,
+    name: &str,
+    from_file: &[Episode],
+) -> Result<Vec<Episode>, HarnessError> {
+    let wanted: HashSet<&str> = config.categories.iter().map(String::as_str).collect();
+    match &config.episodes {
+        EpisodeSource::File { .. } => Ok(from_file
+            .iter()
+            .filter(|e| {
+                sornav_platform_sim::episodes::habitat::scene_stem(&e.scene_id) == name
+                    || e.scene_id == name
+            })
+            .filter(|e| wanted.contains(e.object_category.as_str()))
+            .cloned()
+            .collect()),
+        EpisodeSource::Generate {
+            per_category,
+            per_scene,
+        } => {
+            let generator = GeneratorConfig {
+                categories: config.categories.clone(),
+                episodes_per_category: *per_category,
+                seed: generator_seed(config.seed, name),
+                ..GeneratorConfig::default()
+            };
+            let mut all =
+                generate_episodes(sim, &generator).map_err(|e| HarnessError::Episodes {
+                    scene: name.to_owned(),
+                    message: e.to_string(),
+                })?;
+            if let Some(cap) = per_scene {
+                // Round robin over the categories, in generation order.
+                let mut by_cat: Vec<Vec<Episode>> = Vec::new();
+                for e in all.drain(..) {
+                    match by_cat
+                        .iter_mut()
+                        .find(|v| v[0].object_category == e.object_category)
+                    {
+                        Some(v) => v.push(e),
+                        None => by_cat.push(vec![e]),
+                    }
+                }
+                let mut round = 0;
+                while all.len() < *cap && by_cat.iter().any(|v| v.len() > round) {
+                    for v in &by_cat {
+                        if all.len() < *cap
+                            && let Some(e) = v.get(round)
+                        {
+                            all.push(e.clone());
+                        }
+                    }
+                    round += 1;
+                }
+            }
+            Ok(all)
+        }
+    }
+}
+
+/// Reads `episodes.jsonl` (missing file: no records).
+///
+/// # Errors
+/// [`HarnessError::Io`], or [`HarnessError::Malformed`] with the line
+/// number; a truncated last line (an interrupted write) is dropped with a
+/// warning instead.
+pub fn read_records(path: &Path) -> Result<Vec<EpisodeRecord>, HarnessError> {
+    let file = match File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(io_err(path, e)),
+    };
+    let lines: Vec<String> = BufReader::new(file)
+        .lines()
+        .collect::<Result<_, _>>()
+        .map_err(|e| io_err(path, e))?;
+    let mut out = Vec::with_capacity(lines.len());
+    let last = lines.len();
+    for (i, line) in lines.iter().enumerate() {
+        if line.trim().is_empty() {
+            continue;
+        }
+        match serde_json::from_str::<EpisodeRecord>(line) {
+            Ok(r) => out.push(r),
+            Err(e) if i + 1 == last => {
+                tracing::warn!("{}: dropping a truncated last line ({e})", path.display());
+            }
+            Err(e) => {
+                return Err(HarnessError::Malformed {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                    message: e.to_string(),
+                });
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Checks or writes `run.json`.
+fn check_run_file(dir: &Path, config: &EvalConfig, fresh: bool) -> Result<(), HarnessError> {
+    let path = dir.join("run.json");
+    let jsonl = dir.join("episodes.jsonl");
+    if fresh {
+        for f in [&path, &jsonl] {
+            if f.exists() {
+                std::fs::remove_file(f).map_err(|e| io_err(f, e))?;
+            }
+        }
+        let maps = dir.join("maps");
+        if maps.exists() {
+            std::fs::remove_dir_all(&maps).map_err(|e| io_err(&maps, e))?;
+        }
+    }
+    if path.exists() {
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        let old: EvalConfig = serde_json::from_str(&text).map_err(|e| HarnessError::Malformed {
+            path: path.clone(),
+            line: 0,
+            message: e.to_string(),
+        })?;
+        // Compare through JSON: floating-point fields round-trip exactly.
+        let same = serde_json::to_value(&old).ok() == serde_json::to_value(config).ok();
+        if !same {
+            return Err(HarnessError::DifferentRun(dir.to_path_buf()));
+        }
+        return Ok(());
+    }
+    let text = serde_json::to_string_pretty(config).map_err(|e| io_err(&path, e))?;
+    std::fs::write(&path, text).map_err(|e| io_err(&path, e))
+}
+
+/// The transport of the LLM policy (HTTP, recording or replay).
+fn llm_transport(settings: &LlmSettings) -> Result<Arc<dyn Transport>, HarnessError> {
+    if let Some(replay) = &settings.replay {
+        let t = ReplayTransport::open(replay).map_err(|e| io_err(replay, e))?;
+        return Ok(Arc::new(t));
+    }
+    let c = &settings.config;
+    let api_key = c
+        .api_key_env
+        .as_deref()
+        .and_then(|v| std::env::var(v).ok())
+        .filter(|k| !k.is_empty());
+    let http = HttpTransport::new(
+        &c.base_url,
+        api_key,
+        std::time::Duration::from_secs_f64(c.timeout_s),
+        c.use_env_proxy,
+    );
+    match &settings.record {
+        Some(path) => Ok(Arc::new(
+            RecordingTransport::new(http, path).map_err(|e| io_err(path, e))?,
+        )),
+        None => Ok(Arc::new(http)),
+    }
+}
+
+/// The agent factory of an agent variant.
+fn factory(
+    config: &EvalConfig,
+    variant: Variant,
+    llm: Option<&Arc<dyn Transport>>,
+) -> Result<ConfigFactory, HarnessError> {
+    let mut agent = config
+        .agent
+        .clone()
+        .with_variant(variant)
+        .map_err(AgentError::from)?;
+    let mut policy: Option<Box<dyn Fn() -> Result<BoxedPolicy, AgentError> + Send + Sync>> = None;
+    if variant == Variant::Sornav
+        && let (Some(settings), Some(transport)) = (&config.llm, llm)
+    {
+        agent.policy = PolicyConfig::Llm(settings.config.clone());
+        let (c, t) = (settings.config.clone(), Arc::clone(transport));
+        policy = Some(Box::new(move || {
+            let p = sornav::supervisor::LlmPolicy::with_transport(c.clone(), Arc::clone(&t))?;
+            Ok(Box::new(p) as BoxedPolicy)
+        }));
+    }
+    Ok(ConfigFactory {
+        config: agent,
+        policy,
+    })
+}
+
+/// Builds the top-down map of a finished episode.
+fn topdown(
+    sim: &Simulator,
+    episode: &Episode,
+    record: &EpisodeRecord,
+    trace: &EpisodeTrace,
+    snapshot: Option<sornav::AgentSnapshot>,
+) -> TopDownMap {
+    let (occupancy, frontier_cells, final_yaw) = match &snapshot {
+        Some(s) => {
+            let res = s.occupancy.resolution as f32;
+            let cells = s
+                .frontiers
+                .iter()
+                .flat_map(|f| f.cells.iter())
+                .map(|c| [(c.x as f32 + 0.5) * res, (c.y as f32 + 0.5) * res])
+                .collect();
+            (s.occupancy.clone(), cells, s.pose.map_or(0.0, |p| p.yaw))
+        }
+        None => Default::default(),
+    };
+    TopDownMap {
+        title: format!(
+            "{} / {} #{}: {} ({}, {} actions)",
+            record.variant,
+            record.result.scene_id,
+            record.result.episode_id,
+            record.result.object_category,
+            crate::summary::outcome_name(record.result.outcome),
+            record.result.actions
+        ),
+        occupancy,
+        frontier_cells,
+        trajectory: trace.trajectory.iter().map(|p| [p[0], p[1]]).collect(),
+        relocations: trace.relocations.iter().map(|r| (r.1, r.2)).collect(),
+        goals: episode
+            .goals
+            .iter()
+            .filter_map(|g| {
+                u32::try_from(g.object_id)
+                    .ok()
+                    .and_then(|id| sim.scene().instance(id))
+            })
+            .map(|i| {
+                (
+                    [i.bounds.min.x as f32, i.bounds.min.y as f32],
+                    [i.bounds.max.x as f32, i.bounds.max.y as f32],
+                )
+            })
+            .collect(),
+        view_points: episode
+            .view_point_positions()
+            .iter()
+            .map(|p| [p.x as f32, p.y as f32])
+            .collect(),
+        verified: trace
+            .verifications
+            .iter()
+            .map(|v| [v.1[0], v.1[1]])
+            .collect(),
+        final_yaw,
+        success: record.result.success,
+    }
+}
+
+/// File-name-safe text.
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// Runs (or resumes) an evaluation and writes its outputs.
+///
+/// # Errors
+/// [`HarnessError`] for invalid settings, unloadable scenes, a different
+/// evaluation already in `out`, and I/O failures. A single episode that
+/// fails to start (no navigable start) is logged and skipped, not fatal.
+pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, HarnessError> {
+    config.validate()?;
+    if let Some((i, n)) = options.shard
+        && (n == 0 || i >= n)
+    {
+        return Err(HarnessError::Config(format!("shard {i}/{n}: need i < n")));
+    }
+    let t0 = Instant::now();
+    std::fs::create_dir_all(&options.out).map_err(|e| io_err(&options.out, e))?;
+    check_run_file(&options.out, config, options.fresh)?;
+    let jsonl = options.out.join("episodes.jsonl");
+    let done: HashSet<(String, String, String)> = read_records(&jsonl)?
+        .iter()
+        .map(EpisodeRecord::key)
+        .collect();
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.jobs.max(1))
+        .build()
+        .map_err(|e| HarnessError::Config(format!("thread pool: {e}")))?;
+
+    // Scenes and episodes.
+    let from_file: Vec<Episode> = match &config.episodes {
+        EpisodeSource::File { path } => HabitatDataset::read(path)
+            .and_then(|d| d.to_episodes())
+            .map_err(|e| io_err(path, e))?,
+        EpisodeSource::Generate { .. } => Vec::new(),
+    };
+    let scenes: Vec<LoadedScene> = pool.install(|| {
+        config
+            .scenes
+            .par_iter()
+            .map(|source| {
+                let name = source.name();
+                let sim = source.simulator(config.models.as_deref(), &config.camera)?;
+                let episodes = scene_episodes(config, &sim, &name, &from_file)?;
+                Ok(LoadedScene {
+                    name,
+                    sim: Arc::new(sim),
+                    episodes,
+                })
+            })
+            .collect::<Result<Vec<_>, HarnessError>>()
+    })?;
+
+    // Work items, in a fixed order; then the shard; then resume.
+    let mut items = Vec::new();
+    for (s, scene) in scenes.iter().enumerate() {
+        for e in 0..scene.episodes.len() {
+            for v in 0..config.variants.len() {
+                items.push(WorkItem {
+                    scene: s,
+                    episode: e,
+                    variant: v,
+                });
+            }
+        }
+    }
+    // Maps: the first `maps` episodes (in order) of every variant.
+    let map_episodes: HashSet<(usize, usize)> = items
+        .iter()
+        .map(|w| (w.scene, w.episode))
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .take(config.maps)
+        .collect();
+    if let Some((i, n)) = options.shard {
+        items = items
+            .into_iter()
+            .enumerate()
+            .filter(|(k, _)| k % n == i)
+            .map(|(_, w)| w)
+            .collect();
+    }
+    let total = items.len();
+    let key = |w: &WorkItem| {
+        (
+            config.variants[w.variant].clone(),
+            scenes[w.scene].name.clone(),
+            scenes[w.scene].episodes[w.episode].episode_id.clone(),
+        )
+    };
+    items.retain(|w| !done.contains(&key(w)));
+    let skipped = total - items.len();
+    if skipped > 0 {
+        tracing::info!(
+            "{skipped} of {total} episodes already in {} (resuming; --fresh starts over)",
+            jsonl.display()
+        );
+    }
+
+    let transport = config.llm.as_ref().map(llm_transport).transpose()?;
+    let factories: Vec<Option<ConfigFactory>> = config
+        .variants
+        .iter()
+        .map(|v| match Variant::from_name(v) {
+            Some(Variant::Oracle) | None => Ok(None),
+            Some(variant) => factory(config, variant, transport.as_ref()).map(Some),
+        })
+        .collect::<Result<_, _>>()?;
+
+    let maps_dir = options.out.join("maps");
+    std::fs::create_dir_all(&maps_dir).map_err(|e| io_err(&maps_dir, e))?;
+    let out_file = OpenOptions::new()
+        .create(true)
+        .append(true)
+        .open(&jsonl)
+        .map_err(|e| io_err(&jsonl, e))?;
+    let writer = Mutex::new(std::io::BufWriter::new(out_file));
+    let relocation_maps = std::sync::atomic::AtomicUsize::new(0);
+    let bar = if options.progress {
+        let bar = ProgressBar::new(items.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{elapsed_precise} [{bar:40}] {pos}/{len} episodes ({per_sec}, eta {eta}) {msg}",
+            )
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        bar
+    } else {
+        ProgressBar::hidden()
+    };
+    let successes = std::sync::atomic::AtomicUsize::new(0);
+    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let write_error: Mutex<Option<HarnessError>> = Mutex::new(None);
+
+    pool.install(|| {
+        items.par_iter().for_each(|w| {
+            let scene = &scenes[w.scene];
+            let episode = &scene.episodes[w.episode];
+            let variant = &config.variants[w.variant];
+            let mut run_config = config.run.clone();
+            run_config.noise_seed = config.seed;
+            let (result, trace, snapshot) = match &factories[w.variant] {
+                None => {
+                    let mut oracle = Oracle::new();
+                    (
+                        run_episode(&scene.sim, episode, &mut oracle, &run_config),
+                        None,
+                        None,
+                    )
+                }
+                Some(f) => {
+                    let mut policy = SornavPolicy::new(f, config.adapter.clone());
+                    let r = run_episode(&scene.sim, episode, &mut policy, &run_config);
+                    let snapshot = policy.agent().map(sornav::Agent::snapshot);
+                    (r, Some(policy.take_trace()), snapshot)
+                }
+            };
+            let result = match result {
+                Ok(r) => r,
+                Err(e) => {
+                    tracing::warn!("{variant} {} #{}: {e}", scene.name, episode.episode_id);
+                    bar.inc(1);
+                    return;
+                }
+            };
+            let record = EpisodeRecord::new(variant, result, trace.clone());
+            let relocated = !record.relocations.is_empty()
+                && relocation_maps.fetch_add(1, std::sync::atomic::Ordering::Relaxed) < config.maps;
+            if map_episodes.contains(&(w.scene, w.episode)) || relocated {
+                let map = topdown(
+                    &scene.sim,
+                    episode,
+                    &record,
+                    &trace.unwrap_or_default(),
+                    snapshot,
+                );
+                let path = maps_dir.join(format!(
+                    "{}__{}__{}.png",
+                    safe(variant),
+                    safe(&scene.name),
+                    safe(&episode.episode_id)
+                ));
+                if let Err(e) = map.save_png(&path, 720) {
+                    tracing::warn!("map {}: {e}", path.display());
+                }
+            }
+            let line = serde_json::to_string(&record);
+            let mut guard = writer
+                .lock()
+                .unwrap_or_else(std::sync::PoisonError::into_inner);
+            let written = line.map_err(|e| io_err(&jsonl, e)).and_then(|l| {
+                writeln!(guard, "{l}")
+                    .and_then(|()| guard.flush())
+                    .map_err(|e| io_err(&jsonl, e))
+            });
+            drop(guard);
+            if let Err(e) = written {
+                let mut slot = write_error
+                    .lock()
+                    .unwrap_or_else(std::sync::PoisonError::into_inner);
+                slot.get_or_insert(e);
+            }
+            let s = successes.fetch_add(
+                usize::from(record.result.success),
+                std::sync::atomic::Ordering::Relaxed,
+            ) + usize::from(record.result.success);
+            let f = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            bar.set_message(format!("SR {:.2}", s as f64 / f as f64));
+            bar.inc(1);
+        });
+    });
+    bar.finish_and_clear();
+    if let Some(e) = write_error
+        .into_inner()
+        .unwrap_or_else(std::sync::PoisonError::into_inner)
+    {
+        return Err(e);
+    }
+    let ran = items.len();
+    let wall_s = t0.elapsed().as_secs_f64();
+    let records = read_records(&jsonl)?;
+    let report = report::write(&options.out, config, &records, Some(wall_s))?;
+    Ok(RunOutcome {
+        items: total,
+        skipped,
+        ran,
+        wall_s,
+        report,
+    })
+}
+
+/// Merges the output directories of shards of one evaluation into `out`:
+/// records are de-duplicated by (variant, scene, episode), maps are copied,
+/// and the summary, report and figures are written for the union.
+///
+/// # Errors
+/// [`HarnessError::DifferentRun`] when the shards' `run.json` differ (or
+/// differ from one already in `out`), and I/O errors.
+pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<PathBuf, HarnessError> {
+    if shards.is_empty() {
+        return Err(HarnessError::Config(
+            "merge needs at least one shard directory".into(),
+        ));
+    }
+    let mut config: Option<EvalConfig> = None;
+    let mut records = Vec::new();
+    let mut seen = HashSet::new();
+    for dir in shards {
+        let path = dir.join("run.json");
+        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+        let c: EvalConfig = serde_json::from_str(&text).map_err(|e| HarnessError::Malformed {
+            path: path.clone(),
+            line: 0,
+            message: e.to_string(),
+        })?;
+        match &config {
+            Some(first) if serde_json::to_value(first).ok() != serde_json::to_value(&c).ok() => {
+                return Err(HarnessError::DifferentRun(dir.clone()));
+            }
+            Some(_) => {}
+            None => config = Some(c),
+        }
+        for r in read_records(&dir.join("episodes.jsonl"))? {
+            if seen.insert(r.key()) {
+                records.push(r);
+            }
+        }
+    }
+    let config = config.ok_or_else(|| HarnessError::Config("no shard".into()))?;
+    std::fs::create_dir_all(out).map_err(|e| io_err(out, e))?;
+    check_run_file(out, &config, false)?;
+    // Keep what `out` already holds too (merging into one of the shards).
+    let jsonl = out.join("episodes.jsonl");
+    for r in read_records(&jsonl)? {
+        if seen.insert(r.key()) {
+            records.push(r);
+        }
+    }
+    let tmp = out.join("episodes.jsonl.tmp");
+    {
+        let mut f = std::io::BufWriter::new(File::create(&tmp).map_err(|e| io_err(&tmp, e))?);
+        for r in &records {
+            let line = serde_json::to_string(r).map_err(|e| io_err(&tmp, e))?;
+            writeln!(f, "{line}").map_err(|e| io_err(&tmp, e))?;
+        }
+        f.flush().map_err(|e| io_err(&tmp, e))?;
+    }
+    std::fs::rename(&tmp, &jsonl).map_err(|e| io_err(&jsonl, e))?;
+    let maps = out.join("maps");
+    std::fs::create_dir_all(&maps).map_err(|e| io_err(&maps, e))?;
+    for dir in shards {
+        let Ok(entries) = std::fs::read_dir(dir.join("maps")) else {
+            continue;
+        };
+        for e in entries.flatten() {
+            let target = maps.join(e.file_name());
+            if e.path() != target && !target.exists() {
+                std::fs::copy(e.path(), &target).map_err(|err| io_err(&target, err))?;
+            }
+        }
+    }
+    Ok(report::write(out, &config, &records, None)?)
+}

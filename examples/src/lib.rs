@@ -1,0 +1,28 @@
+//! The runnable programs of sornav and the library code behind them.
+//!
+//! * [`adapter`]: the SOR-Nav [`Agent`](sornav::Agent) on platform-sim's
+//!   ObjectNav protocol ([`adapter::SornavPolicy`]): 12 scan turns, path
+//!   following on the agent's own map, verification turns, STOP on
+//!   confirmation.
+//! * [`harness`]: the evaluation behind `sornav-sim` — scenes
+//!   ([`scenes`]), generated or Habitat episodes, the five variants,
+//!   parallel jobs, resume, shards and [`harness::merge`].
+//! * [`record`], [`summary`], [`report`], [`figures`], [`topdown`]: the
+//!   outputs (`episodes.jsonl`, `summary.json`, `report.md`, PNG figures
+//!   and top-down maps).
+//!
+//! These modules hold no navigation algorithm: the algorithms live in the
+//! `sornav-*` crates and the simulator in `sornav-platform-sim`.
+#![forbid(unsafe_code)]
+#![deny(missing_docs)]
+
+pub mod adapter;
+pub mod decision_log;
+pub mod figures;
+pub mod harness;
+pub mod histogram;
+pub mod record;
+pub mod report;
+pub mod scenes;
+pub mod summary;
+pub mod topdown;

@@ -1,0 +1,948 @@
+//! The robot node's logic as a pure state machine: decoded messages in,
+//! messages to publish out. No DDS here, so all of it is testable with plain
+//! function calls; [`crate::node`] only moves messages between this and
+//! ROS 2.
+//!
+//! * **Odometry** (`/state_estimation`) gives the base pose (through the
+//!   LiDAR extrinsic when the odometry is the sensor's) and the sensor
+//!   origin. The agent is created at the first odometry message, with the
+//!   floor at the base height unless `inputs.floor_z` is set.
+//! * **Clouds**: `/semantic_scan` points (with their `label`) are buffered;
+//!   `/registered_scan` returns and `/terrain_map` cells (re-projected to the
+//!   floor plus their height above ground) are buffered as *unlabelled*
+//!   returns. At `observe_hz` the buffers become one
+//!   [`CloudObservation`]: the labelled points,
+//!   plus the unlabelled returns that fall in no voxel a labelled point of
+//!   this observation occupies, tagged with the unlabelled (ignored) label.
+//!   So the occupancy grid sees every return, and the semantic map's
+//!   evidence in voxels the segmentation labelled is not diluted.
+//! * **Agent**: [`Agent::step`] runs at `control_hz` (1 Hz); its executor
+//!   computes arrival from the odometry pose (the CMU stack has no "reached"
+//!   signal). Every dispatched mission's waypoint is published on
+//!   `/way_point` and re-published every `waypoint_republish_s`; `Verify`,
+//!   `Stop` and `Exhausted` hold the robot (a waypoint at its own position).
+//! * **Targets** (`/sornav/target`) switch the agent's target and keep its
+//!   maps, so targets can follow one another; a confirmed target is kept in
+//!   the status.
+//! * **Start** publishes the `/joy` message that puts the CMU local planner
+//!   in autonomy mode (`axes[2] = -1`, `axes[4] = 1`) and releases `/stop`;
+//!   **shutdown** holds the robot and publishes `/stop = 2`.
+//! * **Relay** (optional): the path follower's `TwistStamped` becomes the
+//!   Scout driver's `Twist`, clamped to the configured speed limits, with a
+//!   watchdog that sends one zero twist when commands stop.
+
+use std::collections::{HashSet, VecDeque};
+use std::time::Duration;
+
+use nalgebra::{Isometry3, Point3, Translation3};
+use serde::{Deserialize, Serialize};
+use sornav::executor::{Mission, MissionId, RobotPose};
+use sornav::semantic_map::{LabelId, LabeledPoint};
+use sornav::{Agent, AgentCommand, AgentError, AgentStats, CloudObservation, Observation, Sensor};
+
+use crate::config::{ConfigError, OdometryFrame, ScoutConfig};
+use crate::markers::markers_from_snapshot;
+use crate::msg::{
+    Header, Int8, Joy, MarkerArray, Odometry, Path, Point, PointCloud2, PointStamped, Pose,
+    PoseStamped, Quaternion, RosString, Time, Twist, TwistStamped, Vector3,
+};
+use crate::pointcloud::{CloudError, CloudView};
+
+/// A message the node should publish.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outgoing {
+    /// `/way_point`.
+    WayPoint(PointStamped),
+    /// `/joy`.
+    Joy(Joy),
+    /// `/stop`.
+    Stop(Int8),
+    /// `/sornav/status` (JSON of [`Status`]).
+    Status(RosString),
+    /// `/sornav/markers`.
+    Markers(MarkerArray),
+    /// `/sornav/path`.
+    Path(Path),
+    /// Relay output (the Scout driver's `Twist`).
+    CmdVel(Twist),
+}
+
+/// Errors of the bridge's inputs. Each is also counted in [`BridgeStats`]
+/// and reported as `last_error` in the status; none stops the node.
+#[derive(Debug, thiserror::Error)]
+pub enum BridgeError {
+    /// The configuration is invalid.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// A cloud's layout is malformed or lacks a needed field.
+    #[error("malformed cloud on {topic}: {source}")]
+    Cloud {
+        /// The topic.
+        topic: &'static str,
+        /// Why.
+        #[source]
+        source: CloudError,
+    },
+    /// A message is in the wrong frame.
+    #[error("{topic} is in frame `{got}`, expected `{expected}`")]
+    Frame {
+        /// The topic.
+        topic: &'static str,
+        /// Expected frame.
+        expected: String,
+        /// The message's frame.
+        got: String,
+    },
+    /// The odometry pose is not finite or its quaternion is degenerate.
+    #[error("odometry pose is not finite or its orientation is degenerate")]
+    BadOdometry,
+    /// A cloud arrived before any odometry (no sensor origin yet).
+    #[error("cloud on {0} before the first odometry message")]
+    NoOdometry(&'static str),
+    /// The target request is blank.
+    #[error("blank target request")]
+    BlankTarget,
+    /// The agent refused something (unknown target, bad observation, ...).
+    #[error(transparent)]
+    Agent(#[from] AgentError),
+}
+
+/// What the node is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum NodeState {
+    /// No odometry yet (or it is stale): holding.
+    WaitingForOdometry,
+    /// No target requested yet.
+    Idle,
+    /// Searching for the target.
+    Searching,
+    /// The target was confirmed; waiting for the next request.
+    Confirmed,
+    /// Nothing left to explore; waiting for the next request.
+    Exhausted,
+    /// Shut down.
+    Stopped,
+}
+
+/// Counters of the bridge.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct BridgeStats {
+    /// Odometry messages used.
+    pub odometry: u64,
+    /// Semantic clouds used.
+    pub semantic_clouds: u64,
+    /// Registered scans used.
+    pub registered_scans: u64,
+    /// Terrain maps used.
+    pub terrain_maps: u64,
+    /// Messages rejected (malformed cloud, wrong frame, bad odometry).
+    pub rejected_messages: u64,
+    /// Cloud points skipped (non-finite coordinate or bad label).
+    pub skipped_points: u64,
+    /// Buffered points dropped by the per-observation cap.
+    pub dropped_points: u64,
+    /// Unlabelled returns left out because a labelled point shared their
+    /// voxel.
+    pub deduplicated_points: u64,
+    /// Observations given to the agent.
+    pub observations: u64,
+    /// Observations the agent refused.
+    pub refused_observations: u64,
+    /// Agent steps.
+    pub steps: u64,
+    /// Way points published (including re-publications).
+    pub waypoints_published: u64,
+    /// Relayed velocity commands.
+    pub relayed: u64,
+}
+
+/// The active mission as reported in the status.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct MissionStatus {
+    /// Mission id.
+    pub id: u64,
+    /// `explore`, `relocate` or `nav_to_object`.
+    pub kind: String,
+    /// Waypoint (map frame).
+    pub waypoint: [f64; 3],
+}
+
+/// The last decision as reported in the status.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DecisionStatus {
+    /// Clock reading (s since the node started).
+    pub at_s: f64,
+    /// The rule that decided (`policy_evaluated`, `target_confirmed`, ...).
+    pub step: String,
+    /// What was done (`explore`, `relocate`, `stop`, ...).
+    pub action: String,
+    /// Why.
+    pub reason: String,
+}
+
+/// A confirmed target.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ConfirmedTarget {
+    /// Category searched.
+    pub category: String,
+    /// The request as given.
+    pub request: String,
+    /// Semantic-map object id.
+    pub object: u64,
+    /// Object centre (map frame).
+    pub centre: [f64; 3],
+    /// When (s since the node started).
+    pub at_s: f64,
+}
+
+/// The JSON document published on `/sornav/status`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Status {
+    /// s since the node started.
+    pub time_s: f64,
+    /// What the node is doing.
+    pub state: NodeState,
+    /// Current target category.
+    pub target: Option<String>,
+    /// Current request text.
+    pub request: Option<String>,
+    /// The active mission.
+    pub active_mission: Option<MissionStatus>,
+    /// The last decision and its reason.
+    pub last_decision: Option<DecisionStatus>,
+    /// Targets confirmed so far, oldest first.
+    pub confirmed: Vec<ConfirmedTarget>,
+    /// Base pose `[x, y, z, yaw]`.
+    pub pose: Option<[f64; 4]>,
+    /// Object clusters in the semantic map.
+    pub objects: usize,
+    /// Frontiers in the frontier map.
+    pub frontiers: usize,
+    /// Agent counters (maps are never reset between targets, so
+    /// `observations` only grows).
+    pub agent: Option<AgentStats>,
+    /// Bridge counters.
+    pub bridge: BridgeStats,
+    /// The last input error.
+    pub last_error: Option<String>,
+}
+
+/// The robot pose from one odometry message.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct OdomSample {
+    base: Isometry3<f64>,
+    sensor: Point3<f64>,
+    at: Duration,
+}
+
+/// The robot node's logic; see the [module docs](self).
+pub struct Bridge {
+    config: ScoutConfig,
+    agent: Option<Agent>,
+    pending_target: Option<String>,
+    state: NodeState,
+    odom: Option<OdomSample>,
+    labelled: VecDeque<Vec<LabeledPoint>>,
+    unlabelled: VecDeque<Vec<Point3<f32>>>,
+    last_observe: Option<Duration>,
+    last_step: Option<Duration>,
+    last_waypoint: Option<Duration>,
+    last_markers: Option<Duration>,
+    last_cmd_vel: Option<Duration>,
+    watchdog_sent: bool,
+    holding: bool,
+    confirmed: Vec<ConfirmedTarget>,
+    stats: BridgeStats,
+    last_error: Option<String>,
+}
+
+impl std::fmt::Debug for Bridge {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Bridge")
+            .field("state", &self.state)
+            .field("stats", &self.stats)
+            .finish_non_exhaustive()
+    }
+}
+
+fn secs(d: Duration) -> f64 {
+    d.as_secs_f64()
+}
+
+fn due(last: Option<Duration>, now: Duration, period_s: f64) -> bool {
+    last.is_none_or(|t| now.saturating_sub(t).as_secs_f64() + 1e-9 >= period_s)
+}
+
+fn voxel(p: &Point3<f32>, inv: f64) -> (i64, i64, i64) {
+    (
+        (f64::from(p.x) * inv).floor() as i64,
+        (f64::from(p.y) * inv).floor() as i64,
+        (f64::from(p.z) * inv).floor() as i64,
+    )
+}
+
+impl Bridge {
+    /// A bridge for `config` (validated).
+    ///
+    /// # Errors
+    /// [`BridgeError::Config`].
+    pub fn new(config: ScoutConfig) -> Result<Self, BridgeError> {
+        config.validate()?;
+        let pending_target = config.initial_target.clone();
+        Ok(Self {
+            config,
+            agent: None,
+            pending_target,
+            state: NodeState::WaitingForOdometry,
+            odom: None,
+            labelled: VecDeque::new(),
+            unlabelled: VecDeque::new(),
+            last_observe: None,
+            last_step: None,
+            last_waypoint: None,
+            last_markers: None,
+            last_cmd_vel: None,
+            watchdog_sent: true,
+            holding: false,
+            confirmed: Vec::new(),
+            stats: BridgeStats::default(),
+            last_error: None,
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &ScoutConfig {
+        &self.config
+    }
+
+    /// The agent (after the first odometry message).
+    pub fn agent(&self) -> Option<&Agent> {
+        self.agent.as_ref()
+    }
+
+    /// What the node is doing.
+    pub fn state(&self) -> NodeState {
+        self.state
+    }
+
+    /// Counters.
+    pub fn stats(&self) -> BridgeStats {
+        self.stats
+    }
+
+    /// Targets confirmed so far.
+    pub fn confirmed(&self) -> &[ConfirmedTarget] {
+        &self.confirmed
+    }
+
+    /// A header in the map frame, stamped with the wall clock.
+    fn header(&self) -> Header {
+        Header::new(Time::now(), self.config.ros.map_frame.clone())
+    }
+
+    /// The `/joy` message that switches the CMU local planner and path
+    /// follower to autonomy mode: `axes[2] = -1` (autonomy), `axes[4] = 1`
+    /// (full autonomy speed; 0 would stop the robot), `axes[5] = 1`
+    /// (obstacle checking on), eight axes and eleven buttons like the CMU
+    /// RViz waypoint tool.
+    pub fn autonomy_joy() -> Joy {
+        Joy {
+            header: Header::new(Time::now(), "sornav"),
+            axes: vec![0.0, 0.0, -1.0, 0.0, 1.0, 1.0, 0.0, 0.0],
+            buttons: vec![0; 11],
+        }
+    }
+
+    /// Messages to publish at start: autonomy mode, release `/stop`, status.
+    pub fn start(&mut self, now: Duration) -> Vec<Outgoing> {
+        vec![
+            Outgoing::Joy(Self::autonomy_joy()),
+            Outgoing::Stop(Int8 { data: 0 }),
+            self.status_message(now),
+        ]
+    }
+
+    /// Messages to publish at shutdown: hold at the current pose, `/stop = 2`
+    /// (stop translation and rotation; the next start releases it), a zero
+    /// twist when relaying, and the final status.
+    pub fn shutdown(&mut self, now: Duration) -> Vec<Outgoing> {
+        self.state = NodeState::Stopped;
+        let mut out = Vec::new();
+        if let Some(w) = self.hold_waypoint() {
+            out.push(w);
+        }
+        out.push(Outgoing::Stop(Int8 { data: 2 }));
+        if self.config.relay.enabled {
+            out.push(Outgoing::CmdVel(Twist::default()));
+        }
+        out.push(self.status_message(now));
+        out
+    }
+
+    fn reject(&mut self, e: BridgeError) -> BridgeError {
+        self.stats.rejected_messages += 1;
+        self.last_error = Some(e.to_string());
+        e
+    }
+
+    fn check_frame(&mut self, topic: &'static str, header: &Header) -> Result<(), BridgeError> {
+        let expected = &self.config.ros.map_frame;
+        if !header.frame_id.is_empty() && header.frame_id.trim_start_matches('/') != expected {
+            let e = BridgeError::Frame {
+                topic,
+                expected: expected.clone(),
+                got: header.frame_id.clone(),
+            };
+            return Err(self.reject(e));
+        }
+        Ok(())
+    }
+
+    /// `/state_estimation`.
+    ///
+    /// # Errors
+    /// [`BridgeError::Frame`], [`BridgeError::BadOdometry`] (counted; the
+    /// pose is not used).
+    pub fn on_odometry(&mut self, msg: &Odometry, now: Duration) -> Result<(), BridgeError> {
+        self.check_frame("odometry", &msg.header)?;
+        let p = msg.pose.pose.position;
+        let Some(q) = msg.pose.pose.orientation.to_unit() else {
+            return Err(self.reject(BridgeError::BadOdometry));
+        };
+        if ![p.x, p.y, p.z].iter().all(|c| c.is_finite()) {
+            return Err(self.reject(BridgeError::BadOdometry));
+        }
+        let odom = Isometry3::from_parts(Translation3::new(p.x, p.y, p.z), q);
+        let lidar = self.config.sensors.lidar.isometry();
+        let base = match self.config.sensors.odometry_frame {
+            OdometryFrame::Lidar => odom * lidar.inverse(),
+            OdometryFrame::Base => odom,
+        };
+        let sensor = Point3::from((base * lidar).translation.vector);
+        self.odom = Some(OdomSample {
+            base,
+            sensor,
+            at: now,
+        });
+        self.stats.odometry += 1;
+        if self.agent.is_none() {
+            let floor = self
+                .config
+                .inputs
+                .floor_z
+                .unwrap_or(base.translation.vector.z);
+            let config = self.config.agent_config(floor)?;
+            self.agent = Some(Agent::new(config)?);
+            self.state = NodeState::Idle;
+            if let Some(request) = self.pending_target.take() {
+                // A bad initial target is reported; the node stays idle.
+                let _ = self.apply_target(&request, now);
+            }
+        } else if self.state == NodeState::WaitingForOdometry {
+            self.state = if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
+                NodeState::Searching
+            } else {
+                NodeState::Idle
+            };
+        }
+        Ok(())
+    }
+
+    fn base_pose(&self) -> Option<RobotPose> {
+        let o = self.odom?;
+        let t = o.base.translation.vector;
+        let (_, _, yaw) = o.base.rotation.euler_angles();
+        Some(RobotPose::new(Point3::new(t.x, t.y, t.z), yaw))
+    }
+
+    fn odometry_fresh(&self, now: Duration) -> bool {
+        self.odom.is_some_and(|o| {
+            now.saturating_sub(o.at).as_secs_f64() <= self.config.rates.odometry_timeout_s
+        })
+    }
+
+    fn trim_buffers(&mut self) {
+        let cap = self.config.inputs.max_points_per_observation;
+        let total = |s: &Self| {
+            s.labelled.iter().map(Vec::len).sum::<usize>()
+                + s.unlabelled.iter().map(Vec::len).sum::<usize>()
+        };
+        while total(self) > cap {
+            // Drop the oldest cloud of the larger buffer.
+            let l: usize = self.labelled.iter().map(Vec::len).sum();
+            let u: usize = self.unlabelled.iter().map(Vec::len).sum();
+            let dropped = if l >= u {
+                self.labelled.pop_front().map_or(0, |c| c.len())
+            } else {
+                self.unlabelled.pop_front().map_or(0, |c| c.len())
+            };
+            if dropped == 0 {
+                break;
+            }
+            self.stats.dropped_points += dropped as u64;
+        }
+    }
+
+    fn cloud_view<'a>(
+        &mut self,
+        topic: &'static str,
+        msg: &'a PointCloud2,
+    ) -> Result<CloudView<'a>, BridgeError> {
+        self.check_frame(topic, &msg.header)?;
+        if self.odom.is_none() {
+            return Err(self.reject(BridgeError::NoOdometry(topic)));
+        }
+        CloudView::new(msg).map_err(|source| self.reject(BridgeError::Cloud { topic, source }))
+    }
+
+    /// `/semantic_scan`: points with a `label` channel. Returns the number
+    /// of points buffered.
+    ///
+    /// # Errors
+    /// [`BridgeError::Frame`], [`BridgeError::NoOdometry`],
+    /// [`BridgeError::Cloud`] (counted; the cloud is dropped).
+    pub fn on_semantic_scan(
+        &mut self,
+        msg: &PointCloud2,
+        _now: Duration,
+    ) -> Result<usize, BridgeError> {
+        let view = self.cloud_view("semantic_scan", msg)?;
+        let field = self.config.inputs.label_field.clone();
+        let decoded = view.labelled_points(&field).map_err(|source| {
+            self.reject(BridgeError::Cloud {
+                topic: "semantic_scan",
+                source,
+            })
+        })?;
+        self.stats.semantic_clouds += 1;
+        self.stats.skipped_points += (decoded.non_finite + decoded.bad_label) as u64;
+        let n = decoded.points.len();
+        self.labelled.push_back(decoded.points);
+        self.trim_buffers();
+        Ok(n)
+    }
+
+    /// `/registered_scan`: unlabelled returns for the occupancy grid (ignored
+    /// when `inputs.use_registered_scan` is false). Returns the number of
+    /// points buffered.
+    ///
+    /// # Errors
+    /// As [`on_semantic_scan`](Self::on_semantic_scan).
+    pub fn on_registered_scan(
+        &mut self,
+        msg: &PointCloud2,
+        _now: Duration,
+    ) -> Result<usize, BridgeError> {
+        if !self.config.inputs.use_registered_scan {
+            return Ok(0);
+        }
+        let view = self.cloud_view("registered_scan", msg)?;
+        let (points, skipped) = view.xyz().map_err(|source| {
+            self.reject(BridgeError::Cloud {
+                topic: "registered_scan",
+                source,
+            })
+        })?;
+        self.stats.registered_scans += 1;
+        self.stats.skipped_points += skipped as u64;
+        let n = points.len();
+        self.unlabelled
+            .push_back(points.iter().map(|p| p.cast::<f32>()).collect());
+        self.trim_buffers();
+        Ok(n)
+    }
+
+    /// `/terrain_map`: cells with their height above ground (intensity),
+    /// re-projected to `floor + height` so that the grid's floor / obstacle
+    /// bands apply to the height above the local ground (ignored when
+    /// `inputs.use_terrain_map` is false). Returns the number of points
+    /// buffered.
+    ///
+    /// # Errors
+    /// As [`on_semantic_scan`](Self::on_semantic_scan).
+    pub fn on_terrain_map(
+        &mut self,
+        msg: &PointCloud2,
+        _now: Duration,
+    ) -> Result<usize, BridgeError> {
+        if !self.config.inputs.use_terrain_map {
+            return Ok(0);
+        }
+        let view = self.cloud_view("terrain_map", msg)?;
+        let field = self.config.inputs.terrain_height_field.clone();
+        let decoded = view.points_with(&field).map_err(|source| {
+            self.reject(BridgeError::Cloud {
+                topic: "terrain_map",
+                source,
+            })
+        })?;
+        let floor = self
+            .agent
+            .as_ref()
+            .map_or(0.0, |a| a.config().frontier.grid.floor_z) as f32;
+        self.stats.terrain_maps += 1;
+        self.stats.skipped_points += decoded.non_finite as u64;
+        let n = decoded.points.len();
+        self.unlabelled.push_back(
+            decoded
+                .points
+                .into_iter()
+                .map(|(p, h)| Point3::new(p.x, p.y, floor + h))
+                .collect(),
+        );
+        self.trim_buffers();
+        Ok(n)
+    }
+
+    /// `/sornav/target`: a new request ("find the television"). The maps are
+    /// kept.
+    ///
+    /// # Errors
+    /// [`BridgeError::BlankTarget`], [`BridgeError::Agent`] for a request no
+    /// category matches (the previous target is kept).
+    pub fn on_target(
+        &mut self,
+        msg: &RosString,
+        now: Duration,
+    ) -> Result<Vec<Outgoing>, BridgeError> {
+        let request = msg.data.trim().to_owned();
+        if request.is_empty() {
+            return Err(self.reject(BridgeError::BlankTarget));
+        }
+        if self.agent.is_none() {
+            self.pending_target = Some(request);
+            return Ok(vec![self.status_message(now)]);
+        }
+        self.apply_target(&request, now)?;
+        Ok(vec![
+            Outgoing::Joy(Self::autonomy_joy()),
+            Outgoing::Stop(Int8 { data: 0 }),
+            self.status_message(now),
+        ])
+    }
+
+    fn apply_target(&mut self, request: &str, now: Duration) -> Result<(), BridgeError> {
+        let Some(agent) = self.agent.as_mut() else {
+            self.pending_target = Some(request.to_owned());
+            return Ok(());
+        };
+        match agent.set_target(request) {
+            Ok(t) => {
+                tracing::info!(request, category = %t.category, "new target");
+                self.state = if self.odometry_fresh(now) {
+                    NodeState::Searching
+                } else {
+                    NodeState::WaitingForOdometry
+                };
+                self.holding = false;
+                // Step at the next tick.
+                self.last_step = None;
+                Ok(())
+            }
+            Err(e) => Err(self.reject(e.into())),
+        }
+    }
+
+    /// The relay: the path follower's `TwistStamped` as a `Twist` clamped to
+    /// the robot's limits (`None` when the relay is disabled). Non-finite
+    /// components become 0.
+    pub fn on_cmd_vel(&mut self, msg: &TwistStamped, now: Duration) -> Option<Outgoing> {
+        if !self.config.relay.enabled || self.state == NodeState::Stopped {
+            return None;
+        }
+        self.last_cmd_vel = Some(now);
+        self.watchdog_sent = false;
+        self.stats.relayed += 1;
+        Some(Outgoing::CmdVel(clamp_twist(
+            &msg.twist,
+            self.config.robot.max_speed_mps,
+            self.config.robot.max_yaw_rate_dps.to_radians(),
+        )))
+    }
+
+    /// A waypoint at the robot's own position (the CMU planner stops there).
+    fn hold_waypoint(&mut self) -> Option<Outgoing> {
+        let pose = self.base_pose()?;
+        self.stats.waypoints_published += 1;
+        Some(Outgoing::WayPoint(PointStamped {
+            header: self.header(),
+            point: Point::from(pose.position),
+        }))
+    }
+
+    fn mission_messages(&mut self, mission: &Mission, now: Duration) -> Vec<Outgoing> {
+        self.stats.waypoints_published += 1;
+        self.last_waypoint = Some(now);
+        self.holding = false;
+        let header = self.header();
+        let mut out = vec![Outgoing::WayPoint(PointStamped {
+            header: header.clone(),
+            point: Point::from(mission.waypoint),
+        })];
+        let poses = mission
+            .path
+            .as_deref()
+            .unwrap_or(&[])
+            .iter()
+            .chain(std::iter::once(&mission.waypoint))
+            .map(|p| PoseStamped {
+                header: header.clone(),
+                pose: Pose {
+                    position: Point::from(*p),
+                    orientation: Quaternion::IDENTITY,
+                },
+            })
+            .collect();
+        out.push(Outgoing::Path(Path { header, poses }));
+        out
+    }
+
+    fn hold(&mut self, out: &mut Vec<Outgoing>) {
+        if !self.holding {
+            self.holding = true;
+            if let Some(w) = self.hold_waypoint() {
+                out.push(w);
+            }
+        }
+    }
+
+    /// Builds one observation from the buffered clouds and gives it to the
+    /// agent.
+    fn observe(&mut self, now: Duration) {
+        let (Some(pose), Some(odom)) = (self.base_pose(), self.odom) else {
+            return;
+        };
+        let Some(agent) = self.agent.as_mut() else {
+            return;
+        };
+        if self.labelled.is_empty() && self.unlabelled.is_empty() {
+            return;
+        }
+        let inv = 1.0 / agent.config().semantic_map.resolution;
+        let unlabelled_label = LabelId(self.config.inputs.unlabelled_label);
+        let mut points: Vec<LabeledPoint> = self.labelled.drain(..).flatten().collect();
+        let occupied: HashSet<(i64, i64, i64)> =
+            points.iter().map(|p| voxel(&p.position, inv)).collect();
+        let mut dedup = 0u64;
+        for p in self.unlabelled.drain(..).flatten() {
+            if occupied.contains(&voxel(&p, inv)) {
+                dedup += 1;
+            } else {
+                points.push(LabeledPoint::new(p.x, p.y, p.z, unlabelled_label));
+            }
+        }
+        self.stats.deduplicated_points += dedup;
+        self.last_observe = Some(now);
+        if points.is_empty() {
+            return;
+        }
+        let observation = Observation {
+            pose,
+            sensor: Sensor::Cloud(CloudObservation {
+                origin: odom.sensor,
+                points,
+            }),
+        };
+        match agent.observe(&observation) {
+            Ok(_) => self.stats.observations += 1,
+            Err(e) => {
+                self.stats.refused_observations += 1;
+                self.last_error = Some(format!("observation refused: {e}"));
+            }
+        }
+    }
+
+    /// Runs whatever is due at clock reading `now` (monotonic, since the node
+    /// started): the relay watchdog, an observation (`observe_hz`), an agent
+    /// step (`control_hz`) with its waypoint and status, waypoint
+    /// re-publication and markers. Call it often (e.g. every 10-50 ms).
+    pub fn tick(&mut self, now: Duration) -> Vec<Outgoing> {
+        let mut out = Vec::new();
+        if self.state == NodeState::Stopped {
+            return out;
+        }
+        if self.config.relay.enabled
+            && !self.watchdog_sent
+            && self
+                .last_cmd_vel
+                .is_some_and(|t| now.saturating_sub(t).as_secs_f64() > self.config.relay.watchdog_s)
+        {
+            self.watchdog_sent = true;
+            out.push(Outgoing::CmdVel(Twist::default()));
+        }
+        let fresh = self.odometry_fresh(now);
+        if !fresh {
+            if self.odom.is_some()
+                && !matches!(self.state, NodeState::WaitingForOdometry)
+                && self.agent.is_some()
+            {
+                self.state = NodeState::WaitingForOdometry;
+                self.last_error = Some("odometry is stale: holding".into());
+                self.holding = false;
+                self.hold(&mut out);
+            }
+            if due(self.last_step, now, 1.0 / self.config.rates.control_hz) {
+                self.last_step = Some(now);
+                out.push(self.status_message(now));
+            }
+            return out;
+        }
+        if self.state == NodeState::WaitingForOdometry && self.agent.is_some() {
+            self.state = if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
+                NodeState::Searching
+            } else {
+                NodeState::Idle
+            };
+        }
+        if due(self.last_observe, now, 1.0 / self.config.rates.observe_hz) {
+            self.observe(now);
+        }
+        if due(self.last_step, now, 1.0 / self.config.rates.control_hz) {
+            self.last_step = Some(now);
+            if self.state == NodeState::Searching {
+                self.step_agent(now, &mut out);
+            }
+            out.push(self.status_message(now));
+        } else if self.state == NodeState::Searching
+            && due(
+                self.last_waypoint,
+                now,
+                self.config.rates.waypoint_republish_s,
+            )
+            && let Some(mission) = self
+                .agent
+                .as_ref()
+                .and_then(|a| a.active_mission())
+                .map(|(_, m)| m.clone())
+        {
+            // Re-publish: the planner may have started late or dropped it.
+            self.stats.waypoints_published += 1;
+            self.last_waypoint = Some(now);
+            out.push(Outgoing::WayPoint(PointStamped {
+                header: self.header(),
+                point: Point::from(mission.waypoint),
+            }));
+        }
+        if due(self.last_markers, now, self.config.rates.markers_period_s)
+            && let Some(agent) = self.agent.as_ref()
+        {
+            self.last_markers = Some(now);
+            let snapshot = agent.snapshot();
+            out.push(Outgoing::Markers(markers_from_snapshot(
+                &snapshot,
+                &self.confirmed,
+                &self.config,
+                &self.header(),
+            )));
+        }
+        out
+    }
+
+    fn step_agent(&mut self, now: Duration, out: &mut Vec<Outgoing>) {
+        let Some(agent) = self.agent.as_mut() else {
+            return;
+        };
+        if agent.pose().is_none() {
+            return; // no observation yet
+        }
+        let clock = agent.last_step().map_or(now, |t| t.max(now));
+        let result = agent.step(clock);
+        self.stats.steps += 1;
+        match result {
+            Ok(AgentCommand::Dispatch { mission, .. }) => {
+                out.extend(self.mission_messages(&mission, now));
+            }
+            Ok(AgentCommand::Continue { mission: None }) => self.hold(out),
+            Ok(AgentCommand::Continue { mission: Some(_) }) => {}
+            Ok(AgentCommand::Verify { .. }) => self.hold(out),
+            Ok(AgentCommand::Stop { object, centre }) => {
+                let (category, request) = agent
+                    .target()
+                    .map(|t| (t.category.clone(), t.request.clone()))
+                    .unwrap_or_default();
+                tracing::info!(%category, object = object.0, "target confirmed");
+                self.confirmed.push(ConfirmedTarget {
+                    category,
+                    request,
+                    object: object.0,
+                    centre: [centre.x, centre.y, centre.z],
+                    at_s: secs(now),
+                });
+                self.state = NodeState::Confirmed;
+                self.hold(out);
+            }
+            Ok(AgentCommand::Exhausted) => {
+                self.state = NodeState::Exhausted;
+                self.hold(out);
+            }
+            Err(AgentError::NoObservation) => {}
+            Err(e) => self.last_error = Some(format!("agent step failed: {e}")),
+        }
+    }
+
+    /// The current status document.
+    pub fn status(&self, now: Duration) -> Status {
+        let agent = self.agent.as_ref();
+        let active = agent.and_then(|a| a.active_mission());
+        Status {
+            time_s: secs(now),
+            state: self.state,
+            target: agent
+                .and_then(|a| a.target())
+                .map(|t| t.category.clone())
+                .or_else(|| self.pending_target.clone()),
+            request: agent.and_then(|a| a.target()).map(|t| t.request.clone()),
+            active_mission: active.map(|(id, m): (MissionId, &Mission)| MissionStatus {
+                id: id.0,
+                kind: m.kind.name().to_owned(),
+                waypoint: [m.waypoint.x, m.waypoint.y, m.waypoint.z],
+            }),
+            last_decision: agent
+                .and_then(|a| a.decisions().last())
+                .map(|d| DecisionStatus {
+                    at_s: d.at.as_secs_f64(),
+                    step: serde_json::to_value(d.step)
+                        .ok()
+                        .and_then(|v| v.as_str().map(str::to_owned))
+                        .unwrap_or_default(),
+                    action: d.action.clone(),
+                    reason: d.reason.clone(),
+                }),
+            confirmed: self.confirmed.clone(),
+            pose: self
+                .base_pose()
+                .map(|p| [p.position.x, p.position.y, p.position.z, p.yaw]),
+            objects: agent.map_or(0, |a| a.semantic_map().cluster_count()),
+            frontiers: agent.map_or(0, |a| a.frontier_map().graph().nodes().len()),
+            agent: agent.map(Agent::stats),
+            bridge: self.stats,
+            last_error: self.last_error.clone(),
+        }
+    }
+
+    fn status_message(&self, now: Duration) -> Outgoing {
+        Outgoing::Status(RosString {
+            data: serde_json::to_string(&self.status(now)).unwrap_or_default(),
+        })
+    }
+}
+
+/// Clamps a twist to a ground robot's limits: planar linear velocity to
+/// `max_speed` (m/s, keeping its direction), yaw rate to `max_yaw_rate`
+/// (rad/s); roll/pitch rates, vertical speed and non-finite components
+/// become 0.
+pub fn clamp_twist(t: &Twist, max_speed: f64, max_yaw_rate: f64) -> Twist {
+    let f = |v: f64| if v.is_finite() { v } else { 0.0 };
+    let (vx, vy) = (f(t.linear.x), f(t.linear.y));
+    let speed = vx.hypot(vy);
+    let scale = if speed > max_speed {
+        max_speed / speed
+    } else {
+        1.0
+    };
+    Twist {
+        linear: Vector3::new(vx * scale, vy * scale, 0.0),
+        angular: Vector3::new(0.0, 0.0, f(t.angular.z).clamp(-max_yaw_rate, max_yaw_rate)),
+    }
+}

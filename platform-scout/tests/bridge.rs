@@ -1,0 +1,508 @@
+//! The robot node's logic without DDS: decoded messages in, messages to
+//! publish out.
+
+use std::time::Duration;
+
+use proptest::prelude::*;
+use sornav_platform_scout::bridge::{
+    Bridge, BridgeError, NodeState, Outgoing, Status, clamp_twist,
+};
+use sornav_platform_scout::config::ScoutConfig;
+use sornav_platform_scout::markers::NAMESPACES;
+use sornav_platform_scout::msg::*;
+use sornav_platform_scout::pointcloud::{encode_cloud, xyzi_fields, xyzl_fields};
+
+const LIDAR_Z: f64 = 0.55;
+
+fn ms(t: u64) -> Duration {
+    Duration::from_millis(t)
+}
+
+/// The test room of `dds_loopback.rs`: walls (1), floor (2) and a TV (15)
+/// sampled at voxel centres.
+fn room() -> Vec<[f64; 4]> {
+    let mut pts = Vec::new();
+    for i in -60..=60 {
+        for h in 0..18 {
+            let (x, z) = (f64::from(i) * 0.05, f64::from(h) * 0.05);
+            pts.push([x, 2.0, z, 1.0]);
+            pts.push([x, -2.0, z, 1.0]);
+        }
+    }
+    for j in -40..=40 {
+        let y = f64::from(j) * 0.05;
+        for h in 0..18 {
+            let z = f64::from(h) * 0.05;
+            pts.push([-3.0, y, z, 1.0]);
+            if y.abs() > 0.6 {
+                pts.push([3.0, y, z, 1.0]);
+            }
+        }
+        for i in -55..=55 {
+            pts.push([f64::from(i) * 0.05, y, 0.0, 2.0]);
+        }
+    }
+    for a in 0..10 {
+        for b in 0..6 {
+            pts.push([
+                -1.175 + f64::from(a) * 0.05,
+                1.875,
+                0.575 + f64::from(b) * 0.05,
+                15.0,
+            ]);
+        }
+    }
+    pts
+}
+
+fn semantic(pts: &[[f64; 4]]) -> PointCloud2 {
+    encode_cloud(
+        Header::new(Time::default(), "map"),
+        &xyzl_fields(),
+        16,
+        false,
+        pts.iter().map(|p| &p[..]),
+    )
+    .unwrap()
+}
+
+fn xyzi(pts: &[[f64; 4]], frame: &str) -> PointCloud2 {
+    let (f, step) = xyzi_fields();
+    encode_cloud(
+        Header::new(Time::default(), frame),
+        &f,
+        step,
+        false,
+        pts.iter().map(|p| &p[..]),
+    )
+    .unwrap()
+}
+
+fn odom(x: f64, y: f64, yaw: f64) -> Odometry {
+    let mut o = Odometry::default();
+    o.header.frame_id = "map".into();
+    o.pose.pose.position = Point::new(x, y, LIDAR_Z);
+    o.pose.pose.orientation = Quaternion::from_yaw(yaw);
+    o
+}
+
+fn config() -> ScoutConfig {
+    let mut c = ScoutConfig::default();
+    c.rates.control_hz = 1.0;
+    c.rates.observe_hz = 1.0;
+    c
+}
+
+fn status_of(out: &[Outgoing]) -> Option<Status> {
+    out.iter().rev().find_map(|o| match o {
+        Outgoing::Status(s) => Some(serde_json::from_str(&s.data).unwrap()),
+        _ => None,
+    })
+}
+
+fn waypoints(out: &[Outgoing]) -> Vec<Point> {
+    out.iter()
+        .filter_map(|o| match o {
+            Outgoing::WayPoint(w) => Some(w.point),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn start_enables_autonomy_and_shutdown_stops() {
+    let mut b = Bridge::new(config()).unwrap();
+    let out = b.start(ms(0));
+    let Outgoing::Joy(joy) = &out[0] else {
+        panic!("{out:?}")
+    };
+    assert_eq!(joy.axes.len(), 8);
+    assert_eq!((joy.axes[2], joy.axes[4], joy.axes[5]), (-1.0, 1.0, 1.0));
+    assert_eq!(joy.buttons.len(), 11);
+    assert!(matches!(out[1], Outgoing::Stop(Int8 { data: 0 })));
+    assert_eq!(
+        status_of(&out).unwrap().state,
+        NodeState::WaitingForOdometry
+    );
+
+    b.on_odometry(&odom(1.0, 2.0, 0.0), ms(0)).unwrap();
+    let out = b.shutdown(ms(10));
+    assert_eq!(
+        waypoints(&out),
+        vec![Point::new(1.0, 2.0, 0.0)],
+        "hold at the base position"
+    );
+    assert!(
+        out.iter()
+            .any(|o| matches!(o, Outgoing::Stop(Int8 { data: 2 })))
+    );
+    assert_eq!(status_of(&out).unwrap().state, NodeState::Stopped);
+    assert!(b.tick(ms(2000)).is_empty(), "nothing after shutdown");
+}
+
+#[test]
+fn odometry_of_the_lidar_frame_gives_the_base_pose() {
+    let mut c = config();
+    c.sensors.lidar.x = 0.2; // LiDAR 0.2 m ahead of the base centre
+    let mut b = Bridge::new(c).unwrap();
+    let yaw = std::f64::consts::FRAC_PI_2;
+    b.on_odometry(&odom(1.0, 1.0, yaw), ms(0)).unwrap();
+    let p = b.status(ms(0)).pose.unwrap();
+    assert!(
+        (p[0] - 1.0).abs() < 1e-9 && (p[1] - 0.8).abs() < 1e-9 && p[2].abs() < 1e-9,
+        "{p:?}"
+    );
+    assert!((p[3] - yaw).abs() < 1e-9);
+    // The floor is the base height of the first message.
+    assert_eq!(b.agent().unwrap().config().frontier.grid.floor_z, 0.0);
+    let mut bad = odom(0.0, 0.0, 0.0);
+    bad.pose.pose.orientation = Quaternion {
+        x: 0.0,
+        y: 0.0,
+        z: 0.0,
+        w: 0.0,
+    };
+    assert!(matches!(
+        b.on_odometry(&bad, ms(1)),
+        Err(BridgeError::BadOdometry)
+    ));
+    bad = odom(f64::NAN, 0.0, 0.0);
+    assert!(matches!(
+        b.on_odometry(&bad, ms(1)),
+        Err(BridgeError::BadOdometry)
+    ));
+    assert_eq!(b.stats().rejected_messages, 2);
+}
+
+#[test]
+fn bad_inputs_are_rejected_and_counted() {
+    let mut b = Bridge::new(config()).unwrap();
+    let pts = room();
+    assert!(matches!(
+        b.on_semantic_scan(&semantic(&pts), ms(0)),
+        Err(BridgeError::NoOdometry(_))
+    ));
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    assert!(matches!(
+        b.on_registered_scan(&xyzi(&pts, "base_link"), ms(0)),
+        Err(BridgeError::Frame { .. })
+    ));
+    let mut broken = semantic(&pts);
+    broken.data.truncate(100);
+    assert!(matches!(
+        b.on_semantic_scan(&broken, ms(0)),
+        Err(BridgeError::Cloud { .. })
+    ));
+    // A semantic cloud without a label channel.
+    assert!(matches!(
+        b.on_semantic_scan(&xyzi(&pts, "map"), ms(0)),
+        Err(BridgeError::Cloud { .. })
+    ));
+    assert!(matches!(
+        b.on_target(&RosString { data: " ".into() }, ms(0)),
+        Err(BridgeError::BlankTarget)
+    ));
+    assert!(matches!(
+        b.on_target(
+            &RosString {
+                data: "find the spaceship".into()
+            },
+            ms(0)
+        ),
+        Err(BridgeError::Agent(_))
+    ));
+    let s = b.status(ms(0));
+    assert_eq!(s.bridge.rejected_messages, 6);
+    assert_eq!(s.state, NodeState::Idle);
+    assert!(s.last_error.unwrap().contains("spaceship"));
+    // "/map" is accepted as "map".
+    assert!(b.on_terrain_map(&xyzi(&pts, "/map"), ms(0)).is_ok());
+}
+
+#[test]
+fn unlabelled_returns_feed_occupancy_without_diluting_labelled_voxels() {
+    let mut b = Bridge::new(config()).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    let labelled = [[1.025, 0.025, 0.425, 15.0]];
+    // One unlabelled return in the same voxel, one elsewhere.
+    let unlabelled = [[1.03, 0.03, 0.43, 0.0], [2.025, 1.025, 0.425, 0.0]];
+    b.on_semantic_scan(&semantic(&labelled), ms(0)).unwrap();
+    b.on_registered_scan(&xyzi(&unlabelled, "map"), ms(0))
+        .unwrap();
+    // Terrain: intensity is the height above ground; re-projected to it.
+    b.on_terrain_map(&xyzi(&[[3.025, 0.025, 5.0, 0.425]], "map"), ms(0))
+        .unwrap();
+    b.tick(ms(0));
+    let s = b.status(ms(0));
+    assert_eq!(s.bridge.deduplicated_points, 1);
+    assert_eq!(s.bridge.observations, 1);
+    assert_eq!(s.agent.unwrap().observations, 1);
+    let a = b.agent().unwrap();
+    // The labelled voxel kept a single label; the other two returns are
+    // unlabelled (ignored) evidence at z = floor + height.
+    let m = a.semantic_map();
+    assert_eq!(m.integrations(), 1);
+    // Disabled inputs are ignored.
+    let mut c = config();
+    c.inputs.use_registered_scan = false;
+    c.inputs.use_terrain_map = false;
+    let mut b = Bridge::new(c).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    assert_eq!(
+        b.on_registered_scan(&xyzi(&unlabelled, "map"), ms(0))
+            .unwrap(),
+        0
+    );
+    assert_eq!(
+        b.on_terrain_map(&xyzi(&unlabelled, "map"), ms(0)).unwrap(),
+        0
+    );
+}
+
+#[test]
+fn point_cap_drops_the_oldest_clouds() {
+    let mut c = config();
+    c.inputs.max_points_per_observation = 10;
+    let mut b = Bridge::new(c).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    let cloud: Vec<[f64; 4]> = (0..6)
+        .map(|i| [1.0 + f64::from(i) * 0.1, 0.0, 0.3, 1.0])
+        .collect();
+    b.on_semantic_scan(&semantic(&cloud), ms(0)).unwrap();
+    b.on_semantic_scan(&semantic(&cloud), ms(0)).unwrap();
+    assert_eq!(b.stats().dropped_points, 6);
+}
+
+/// Drives the bridge in the room: returns the outputs of every tick.
+fn run(b: &mut Bridge, from: u64, to: u64, pose: (f64, f64, f64)) -> Vec<Outgoing> {
+    let pts = room();
+    let cloud = semantic(&pts);
+    let mut out = Vec::new();
+    for t in (from..to).step_by(250) {
+        b.on_odometry(&odom(pose.0, pose.1, pose.2), ms(t)).unwrap();
+        if t % 500 == 0 {
+            b.on_semantic_scan(&cloud, ms(t)).unwrap();
+        }
+        out.extend(b.tick(ms(t)));
+    }
+    out
+}
+
+#[test]
+fn finds_the_tv_then_switches_target_keeping_the_maps() {
+    let mut b = Bridge::new(config()).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    let out = b
+        .on_target(
+            &RosString {
+                data: "find the television".into(),
+            },
+            ms(0),
+        )
+        .unwrap();
+    assert!(
+        matches!(out[0], Outgoing::Joy(_)),
+        "a new target re-enables autonomy"
+    );
+    assert_eq!(
+        status_of(&out).unwrap().target.as_deref(),
+        Some("tv_monitor")
+    );
+
+    // N_obs = 3 observations, then NAV_TO_OBJECT toward the TV.
+    let out = run(&mut b, 0, 5000, (0.0, 0.0, 0.0));
+    let s = status_of(&out).unwrap();
+    let m = s.active_mission.clone().expect("a mission");
+    assert_eq!(m.kind, "nav_to_object");
+    let wps = waypoints(&out);
+    let nav = *wps.last().unwrap();
+    let d = (nav.x - m.waypoint[0]).hypot(nav.y - m.waypoint[1]);
+    assert!(
+        d < 1e-6,
+        "the mission's way point is published: {nav:?} vs {:?}",
+        m.waypoint
+    );
+    assert!(
+        out.iter()
+            .any(|o| matches!(o, Outgoing::Path(p) if !p.poses.is_empty()))
+    );
+    let dist = (nav.x - nav.x.clamp(-1.2, -0.7)).hypot(nav.y - 1.875);
+    assert!(dist < 0.6, "{nav:?}");
+    // Re-published while the mission lasts (1 s period, ticks every 250 ms).
+    assert!(
+        wps.iter()
+            .filter(|w| (w.x - nav.x).hypot(w.y - nav.y) < 1e-6)
+            .count()
+            >= 2,
+        "{wps:?}"
+    );
+    let markers = out.iter().rev().find_map(|o| match o {
+        Outgoing::Markers(m) => Some(m.clone()),
+        _ => None,
+    });
+    let markers = markers.expect("markers");
+    assert_eq!(markers.markers[0].action, Marker::DELETEALL);
+    assert!(
+        markers.markers[1..]
+            .iter()
+            .all(|m| NAMESPACES.contains(&m.ns.as_str()))
+    );
+    assert!(
+        markers
+            .markers
+            .iter()
+            .any(|m| m.ns == "object_labels" && m.text.starts_with("tv"))
+    );
+    assert!(markers.markers.iter().any(|m| m.ns == "mission"));
+    assert!(
+        markers
+            .markers
+            .iter()
+            .any(|m| m.ns == "footprint" && m.points.len() == 5)
+    );
+
+    // The planner drives there: arrival from odometry, verification, STOP.
+    let yaw = (1.875 - nav.y).atan2(-0.95 - nav.x);
+    let lidar_x = nav.x;
+    let out = run(&mut b, 5000, 12_000, (lidar_x, nav.y, yaw));
+    let s = status_of(&out).unwrap();
+    assert_eq!(s.state, NodeState::Confirmed, "{:?}", s.last_decision);
+    assert_eq!(s.confirmed.len(), 1);
+    assert_eq!(s.confirmed[0].category, "tv_monitor");
+    assert!((s.confirmed[0].centre[0] + 0.95).abs() < 0.1);
+    assert!(
+        waypoints(&out).contains(&Point::new(nav.x, nav.y, 0.0)),
+        "hold at the target"
+    );
+    let observations = s.agent.unwrap().observations;
+    let objects = s.objects;
+
+    // Next request: the maps are kept.
+    let out = b
+        .on_target(
+            &RosString {
+                data: "toilet".into(),
+            },
+            ms(12_000),
+        )
+        .unwrap();
+    let s = status_of(&out).unwrap();
+    assert_eq!(
+        (s.state, s.target.as_deref()),
+        (NodeState::Searching, Some("toilet"))
+    );
+    assert_eq!(s.agent.unwrap().observations, observations);
+    assert_eq!(s.objects, objects);
+    let out = run(&mut b, 12_000, 14_000, (lidar_x, nav.y, yaw));
+    let s = status_of(&out).unwrap();
+    assert!(s.agent.unwrap().observations > observations);
+    assert_eq!(s.confirmed.len(), 1, "the first confirmation is kept");
+}
+
+#[test]
+fn stale_odometry_holds_the_robot() {
+    let mut b = Bridge::new(config()).unwrap();
+    b.on_target(&RosString { data: "tv".into() }, ms(0))
+        .unwrap();
+    let _ = run(&mut b, 0, 3000, (0.5, 0.0, 0.0));
+    assert_eq!(b.state(), NodeState::Searching);
+    let out = b.tick(ms(6000)); // odometry last at 2.75 s, timeout 1 s
+    assert_eq!(waypoints(&out), vec![Point::new(0.5, 0.0, 0.0)]);
+    assert_eq!(b.state(), NodeState::WaitingForOdometry);
+    let _ = run(&mut b, 6000, 7000, (0.5, 0.0, 0.0));
+    assert_eq!(b.state(), NodeState::Searching);
+}
+
+#[test]
+fn pending_target_applies_at_the_first_odometry() {
+    let mut c = config();
+    c.initial_target = Some("find the television".into());
+    let mut b = Bridge::new(c).unwrap();
+    assert_eq!(
+        b.status(ms(0)).target.as_deref(),
+        Some("find the television")
+    );
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    let s = b.status(ms(0));
+    assert_eq!(
+        (s.state, s.target.as_deref()),
+        (NodeState::Searching, Some("tv_monitor"))
+    );
+}
+
+#[test]
+fn relay_clamps_and_watchdog_zeroes() {
+    let cmd = TwistStamped {
+        header: Header::default(),
+        twist: Twist {
+            linear: Vector3::new(3.0, 0.0, 1.0),
+            angular: Vector3::new(0.5, 0.0, 5.0),
+        },
+    };
+    let mut b = Bridge::new(config()).unwrap();
+    assert!(
+        b.on_cmd_vel(&cmd, ms(0)).is_none(),
+        "relay disabled by default"
+    );
+    let mut c = config();
+    c.relay.enabled = true;
+    let mut b = Bridge::new(c).unwrap();
+    let Some(Outgoing::CmdVel(t)) = b.on_cmd_vel(&cmd, ms(0)) else {
+        panic!()
+    };
+    assert_eq!(t.linear, Vector3::new(0.8, 0.0, 0.0));
+    assert_eq!(t.angular, Vector3::new(0.0, 0.0, 90f64.to_radians()));
+    assert!(
+        b.tick(ms(400))
+            .iter()
+            .all(|o| !matches!(o, Outgoing::CmdVel(_)))
+    );
+    let out = b.tick(ms(600));
+    assert_eq!(
+        out.iter()
+            .filter(|o| matches!(o, Outgoing::CmdVel(t) if *t == Twist::default()))
+            .count(),
+        1
+    );
+    assert!(
+        b.tick(ms(900))
+            .iter()
+            .all(|o| !matches!(o, Outgoing::CmdVel(_))),
+        "watchdog fires once"
+    );
+    assert!(
+        b.shutdown(ms(1000))
+            .iter()
+            .any(|o| matches!(o, Outgoing::CmdVel(t) if *t == Twist::default()))
+    );
+}
+
+proptest! {
+    #[test]
+    fn clamped_twists_respect_the_limits(
+        vx in -10f64..10.0, vy in -10f64..10.0, vz in -10f64..10.0, wz in -10f64..10.0,
+        max_v in 0.1f64..3.0, max_w in 0.1f64..3.0,
+    ) {
+        let t = Twist { linear: Vector3::new(vx, vy, vz), angular: Vector3::new(1.0, 1.0, wz) };
+        let c = clamp_twist(&t, max_v, max_w);
+        let speed = c.linear.x.hypot(c.linear.y);
+        prop_assert!(speed <= max_v + 1e-9);
+        prop_assert!(c.angular.z.abs() <= max_w + 1e-12);
+        prop_assert_eq!((c.linear.z, c.angular.x, c.angular.y), (0.0, 0.0, 0.0));
+        // Direction kept; unchanged when within the limits.
+        prop_assert!((c.linear.x * vy - c.linear.y * vx).abs() < 1e-9);
+        if vx.hypot(vy) <= max_v {
+            prop_assert_eq!((c.linear.x, c.linear.y), (vx, vy));
+        }
+    }
+}
+
+#[test]
+fn clamp_handles_non_finite() {
+    let t = Twist {
+        linear: Vector3::new(f64::NAN, 1.0, 0.0),
+        angular: Vector3::new(0.0, 0.0, f64::INFINITY),
+    };
+    let c = clamp_twist(&t, 0.5, 1.0);
+    assert_eq!((c.linear.x, c.linear.y, c.angular.z), (0.0, 0.5, 0.0));
+}

@@ -1,0 +1,167 @@
+//! The Scout Mini configuration and the topic contract.
+
+use sornav_platform_scout::config::{ConfigError, OdometryFrame, ScoutConfig};
+use sornav_platform_scout::contract::{Direction, Qos, Topics, is_ros_name};
+
+#[test]
+fn committed_example_parses_validates_and_round_trips() {
+    let c = ScoutConfig::from_toml(ScoutConfig::EXAMPLE).unwrap();
+    assert_eq!(c.robot.name, "scout_mini");
+    assert_eq!(c.sensors.odometry_frame, OdometryFrame::Lidar);
+    assert_eq!(c.sensors.lidar.z, 0.55);
+    assert_eq!(c.rates.control_hz, 1.0);
+    assert_eq!(c.topics, Topics::default());
+    assert_eq!(c.agent.frontier.grid.max_range, 8.0);
+    assert_eq!(c.agent.semantic_map.max_range, 8.0);
+    assert_eq!(c.agent.gate.n_obs, 3, "the paper's defaults are kept");
+    let again = ScoutConfig::from_toml(&c.to_toml().unwrap()).unwrap();
+    assert_eq!(again, c);
+    // Everything is optional.
+    assert_eq!(ScoutConfig::from_toml("").unwrap(), ScoutConfig::default());
+}
+
+#[test]
+fn footprint_radii_and_agent_overrides() {
+    let c = ScoutConfig::default();
+    assert!((c.robot.inscribed_radius() - 0.29).abs() < 1e-12);
+    assert!((c.robot.circumscribed_radius() - 0.306f64.hypot(0.29)).abs() < 1e-12);
+    let a = c.agent_config(-0.2).unwrap();
+    assert_eq!(a.frontier.grid.floor_z, -0.2);
+    assert_eq!(a.frontier.grid.robot_radius, c.robot.inflation_radius());
+    assert_eq!(a.frontier.grid.robot_height, 0.75);
+    assert_eq!(a.executor.explore.arrival.radius_m, 1.0);
+    assert_eq!(a.executor.nav_to_object.arrival.radius_m, 0.6);
+    assert_eq!(a.executor.nav_to_object.arrival.heading_tolerance_rad, None);
+    let unl = a.labels.iter().find(|e| e.id == 0).unwrap();
+    assert!(unl.ignored && unl.name == "unlabelled");
+}
+
+fn invalid(text: &str) -> String {
+    match ScoutConfig::from_toml(text) {
+        Err(ConfigError::Invalid { field, .. }) => field.to_owned(),
+        Err(ConfigError::Toml(_)) => "toml".to_owned(),
+        Err(e) => format!("other: {e}"),
+        Ok(_) => panic!("accepted: {text}"),
+    }
+}
+
+#[test]
+fn invalid_configurations_name_the_field() {
+    assert_eq!(
+        invalid("[robot]\nfootprint = [[0.3, 0.3], [-0.3, 0.3]]"),
+        "robot.footprint"
+    );
+    assert_eq!(
+        invalid("[robot]\nfootprint = [[0.3, -0.3], [-0.3, -0.3], [-0.3, 0.3], [0.3, 0.3]]"),
+        "robot.footprint"
+    ); // clockwise
+    assert_eq!(
+        invalid("[robot]\nfootprint = [[1.3, 0.3], [0.5, 0.3], [0.5, -0.3], [1.3, -0.3]]"),
+        "robot.footprint"
+    ); // origin outside
+    assert_eq!(
+        invalid("[robot]\nmax_speed_mps = 0.0"),
+        "robot.max_speed_mps"
+    );
+    assert_eq!(invalid("[robot]\nheight_m = -1.0"), "robot.height_m");
+    assert_eq!(invalid("[sensors.lidar]\nz = nan"), "sensors.lidar");
+    assert_eq!(
+        invalid("[arrival]\nobject_radius_m = 0.0"),
+        "arrival.object_radius_m"
+    );
+    assert_eq!(
+        invalid("[arrival]\nobject_heading_tolerance_deg = 270.0"),
+        "arrival.object_heading_tolerance_deg"
+    );
+    assert_eq!(invalid("[rates]\ncontrol_hz = 0.0"), "rates.control_hz");
+    assert_eq!(invalid("[rates]\nobserve_hz = 100.0"), "rates");
+    assert_eq!(invalid("[ros]\ndomain_id = 300"), "ros.domain_id");
+    assert_eq!(invalid("[ros]\nonly_networks = []"), "ros.only_networks");
+    assert_eq!(invalid("[ros]\nnode_name = \"bad name\""), "ros.node_name");
+    assert_eq!(invalid("[topics]\nway_point = \"way_point\""), "topics");
+    assert_eq!(invalid("[topics]\nstatus = \"/joy\""), "topics");
+    assert_eq!(
+        invalid("[inputs]\nunlabelled_label = 10"),
+        "inputs.unlabelled_label"
+    ); // chair is not ignored
+    assert_eq!(invalid("initial_target = \"  \""), "initial_target");
+    assert_eq!(invalid("[robot]\nwheels = 4"), "toml");
+    assert_eq!(invalid("speed = 1"), "toml");
+    assert!(matches!(
+        ScoutConfig::from_toml("[agent.gate]\nn_obs = 0"),
+        Err(ConfigError::Agent(_))
+    ));
+}
+
+#[test]
+fn contract_defaults_types_and_qos() {
+    let t = Topics::default();
+    assert!(t.validate().is_ok());
+    let specs = t.specs();
+    let get = |role: &str| specs.iter().find(|s| s.role == role).unwrap().clone();
+    let odom = get("odometry");
+    assert_eq!(
+        (odom.name.as_str(), odom.ros_type.as_str()),
+        ("/state_estimation", "nav_msgs/msg/Odometry")
+    );
+    assert_eq!((odom.direction, odom.qos), (Direction::In, Qos::SENSOR));
+    for role in ["occupancy", "traversability", "semantics"] {
+        let s = get(role);
+        assert_eq!(
+            (s.ros_type.as_str(), s.qos),
+            ("sensor_msgs/msg/PointCloud2", Qos::SENSOR)
+        );
+    }
+    assert_eq!(get("semantics").name, "/semantic_scan");
+    assert_eq!(get("traversability").name, "/terrain_map");
+    let w = get("way_point");
+    assert_eq!(
+        (w.name.as_str(), w.ros_type.as_str(), w.direction, w.qos),
+        (
+            "/way_point",
+            "geometry_msgs/msg/PointStamped",
+            Direction::Out,
+            Qos::COMMAND
+        )
+    );
+    assert_eq!(get("target").qos, Qos::COMMAND);
+    assert_eq!(get("status").name, "/sornav/status");
+    assert_eq!(
+        get("markers").ros_type,
+        "visualization_msgs/msg/MarkerArray"
+    );
+    assert_eq!(get("cmd_vel_in").ros_type, "geometry_msgs/msg/TwistStamped");
+    assert_eq!(get("cmd_vel_out").ros_type, "geometry_msgs/msg/Twist");
+    assert!(get("cmd_vel_out").optional);
+    // Every output is reliable: reliable readers (CMU planner, RViz) match it.
+    for s in specs.iter().filter(|s| s.direction == Direction::Out) {
+        assert!(
+            s.qos.writer_matches_reader(Qos::Reliable { depth: 1 }),
+            "{}",
+            s.role
+        );
+    }
+    // Sensor inputs are best effort: they match reliable and best-effort writers.
+    assert!(Qos::Reliable { depth: 5 }.writer_matches_reader(Qos::SENSOR));
+    assert!(Qos::BestEffort { depth: 5 }.writer_matches_reader(Qos::SENSOR));
+    assert!(!Qos::BestEffort { depth: 5 }.writer_matches_reader(Qos::COMMAND));
+}
+
+#[test]
+fn ros_names() {
+    for ok in ["/way_point", "/sornav/status", "/a1/b_2"] {
+        assert!(is_ros_name(ok), "{ok}");
+    }
+    for bad in [
+        "way_point",
+        "/",
+        "//a",
+        "/a//b",
+        "/1a",
+        "/a b",
+        "/a__b",
+        "/a/",
+    ] {
+        assert!(!is_ros_name(bad), "{bad}");
+    }
+}

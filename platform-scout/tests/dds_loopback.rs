@@ -1,0 +1,320 @@
+//! The robot node over real DDS on loopback, inside a private network
+//! namespace, on a private domain id: the test plays the CMU stack and the
+//! sensors (odometry, semantic scan, registered scan, terrain map) of a
+//! room with a television, requests "find the television", and checks that
+//! `/joy`, `/way_point`, `/sornav/status` and, after the robot "arrives",
+//! the confirmation and the shutdown stop arrive with the expected content.
+
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::thread;
+use std::time::{Duration, Instant};
+
+use sornav_platform_scout::bridge::{NodeState, Status};
+use sornav_platform_scout::config::ScoutConfig;
+use sornav_platform_scout::contract::Qos;
+use sornav_platform_scout::msg::*;
+use sornav_platform_scout::netns;
+use sornav_platform_scout::node::{self, RobotNode};
+use sornav_platform_scout::pointcloud::{encode_cloud, xyzi_fields, xyzl_fields};
+
+/// A private domain id (ROS 2 allows 0-232; 0 is the default to avoid).
+const DOMAIN: u16 = 171;
+const LIDAR_Z: f64 = 0.55;
+
+/// A 6 m x 4 m room centred on the origin with a doorway in the east wall,
+/// a floor and a television (label 15) on the north wall: (x, y, z, label).
+fn room() -> Vec<[f64; 4]> {
+    let mut pts = Vec::new();
+    for i in -60..=60 {
+        for h in 0..18 {
+            let (x, z) = (f64::from(i) * 0.05, f64::from(h) * 0.05);
+            pts.push([x, 2.0, z, 1.0]);
+            pts.push([x, -2.0, z, 1.0]);
+        }
+    }
+    for j in -40..=40 {
+        let y = f64::from(j) * 0.05;
+        for h in 0..18 {
+            let z = f64::from(h) * 0.05;
+            pts.push([-3.0, y, z, 1.0]);
+            if y.abs() > 0.6 {
+                pts.push([3.0, y, z, 1.0]);
+            }
+        }
+        for i in -55..=55 {
+            pts.push([f64::from(i) * 0.05, y, 0.0, 2.0]);
+        }
+    }
+    // Sampled at voxel centres (0.025 + k 0.05) so that f32 rounding never
+    // puts two samples in one voxel and none in the next.
+    for a in 0..10 {
+        for b in 0..6 {
+            let (x, z) = (-1.175 + f64::from(a) * 0.05, 0.575 + f64::from(b) * 0.05);
+            pts.push([x, 1.875, z, 15.0]);
+        }
+    }
+    pts
+}
+
+fn header() -> Header {
+    Header::new(Time::now(), "map")
+}
+
+fn odometry(x: f64, y: f64, yaw: f64) -> Odometry {
+    Odometry {
+        header: header(),
+        child_frame_id: "sensor".into(),
+        pose: PoseWithCovariance {
+            pose: Pose {
+                position: Point::new(x, y, LIDAR_Z),
+                orientation: Quaternion::from_yaw(yaw),
+            },
+            covariance: [0.0; 36],
+        },
+        twist: TwistWithCovariance::default(),
+    }
+}
+
+fn wait_for<T>(timeout: Duration, mut f: impl FnMut() -> Option<T>) -> Option<T> {
+    let t0 = Instant::now();
+    while t0.elapsed() < timeout {
+        if let Some(v) = f() {
+            return Some(v);
+        }
+        thread::sleep(Duration::from_millis(20));
+    }
+    None
+}
+
+#[test]
+fn waypoint_and_status_over_loopback() {
+    if !netns::isolate("waypoint_and_status_over_loopback") {
+        return;
+    }
+    let mut config = ScoutConfig::default();
+    config.ros.domain_id = DOMAIN;
+    config.rates.control_hz = 4.0;
+    config.rates.observe_hz = 4.0;
+    config.rates.markers_period_s = 0.5;
+    config.validate().unwrap();
+
+    let stop = Arc::new(AtomicBool::new(false));
+    let node_thread = {
+        let stop = Arc::clone(&stop);
+        let config = config.clone();
+        thread::spawn(move || {
+            let mut robot = RobotNode::new(config).expect("robot node");
+            robot.run(&stop, Duration::from_millis(10), Duration::from_millis(500));
+            robot.bridge().confirmed().to_vec()
+        })
+    };
+
+    // The test plays the CMU stack, the sensors and the operator.
+    let ctx = node::loopback_context(DOMAIN).unwrap();
+    let mut n = node::ros_node(&ctx, "/", "cmu_stack_stub").unwrap();
+    let t = &config.topics;
+    let odom_pub = node::publisher::<Odometry>(&mut n, &t.state_estimation, Qos::SENSOR).unwrap();
+    let sem_pub = node::publisher::<PointCloud2>(&mut n, &t.semantic_scan, Qos::SENSOR).unwrap();
+    let reg_pub = node::publisher::<PointCloud2>(&mut n, &t.registered_scan, Qos::SENSOR).unwrap();
+    let ter_pub = node::publisher::<PointCloud2>(&mut n, &t.terrain_map, Qos::SENSOR).unwrap();
+    let target_pub = node::publisher::<RosString>(&mut n, &t.target, Qos::COMMAND).unwrap();
+    let way_sub = node::subscription::<PointStamped>(&mut n, &t.way_point, Qos::COMMAND).unwrap();
+    let status_sub = node::subscription::<RosString>(&mut n, &t.status, Qos::COMMAND).unwrap();
+    let joy_sub = node::subscription::<Joy>(&mut n, &t.joy, Qos::COMMAND).unwrap();
+    let stop_sub = node::subscription::<Int8>(&mut n, &t.stop, Qos::COMMAND).unwrap();
+    let markers_sub = node::subscription::<MarkerArray>(&mut n, &t.markers, Qos::COMMAND).unwrap();
+
+    let pts = room();
+    let semantic = encode_cloud(
+        header(),
+        &xyzl_fields(),
+        16,
+        false,
+        pts.iter().map(|p| &p[..]),
+    )
+    .unwrap();
+    let (xyzi, step) = xyzi_fields();
+    // Registered scan: the same returns, intensity unused (PCL's padded XYZI).
+    let reg_rows: Vec<[f64; 4]> = pts.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
+    let registered = encode_cloud(
+        header(),
+        &xyzi,
+        step,
+        false,
+        reg_rows.iter().map(|p| &p[..]),
+    )
+    .unwrap();
+    // Terrain map: intensity = height above the ground (the floor is z = 0).
+    let terrain = encode_cloud(
+        header(),
+        &xyzi,
+        step,
+        false,
+        reg_rows
+            .iter()
+            .map(|p| [p[0], p[1], p[2], p[2]])
+            .collect::<Vec<_>>()
+            .iter()
+            .map(|p| &p[..]),
+    )
+    .unwrap();
+
+    let mut robot_xy = (0.0, 0.0, 0.0);
+    let mut statuses: Vec<Status> = Vec::new();
+    let mut waypoints: Vec<PointStamped> = Vec::new();
+    let mut joys: Vec<Joy> = Vec::new();
+    let mut stops: Vec<Int8> = Vec::new();
+    let mut markers_seen = 0usize;
+    let mut last_cloud = Instant::now() - Duration::from_secs(1);
+    let mut target_sent: Option<Instant> = None;
+    let mut arrived = false;
+    let t0 = Instant::now();
+    let mut pump = |robot_xy: (f64, f64, f64),
+                    statuses: &mut Vec<Status>,
+                    waypoints: &mut Vec<PointStamped>,
+                    joys: &mut Vec<Joy>,
+                    stops: &mut Vec<Int8>,
+                    markers_seen: &mut usize| {
+        odom_pub
+            .publish(odometry(robot_xy.0, robot_xy.1, robot_xy.2))
+            .unwrap();
+        if last_cloud.elapsed() > Duration::from_millis(200) {
+            last_cloud = Instant::now();
+            sem_pub.publish(semantic.clone()).unwrap();
+            reg_pub.publish(registered.clone()).unwrap();
+            ter_pub.publish(terrain.clone()).unwrap();
+        }
+        statuses.extend(
+            node::drain(&status_sub, 100)
+                .0
+                .iter()
+                .map(|s| serde_json::from_str::<Status>(&s.data).expect("status is Status JSON")),
+        );
+        waypoints.extend(node::drain(&way_sub, 100).0);
+        joys.extend(node::drain(&joy_sub, 100).0);
+        stops.extend(node::drain(&stop_sub, 100).0);
+        *markers_seen += node::drain(&markers_sub, 100).0.len();
+        thread::sleep(Duration::from_millis(50));
+    };
+
+    // Phase 1: request the target once the node's reader is discovered, and
+    // wait for a NAV_TO_OBJECT way point toward the television.
+    let nav = loop {
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "no NAV_TO_OBJECT way point; statuses: {:?}",
+            statuses.last()
+        );
+        pump(
+            robot_xy,
+            &mut statuses,
+            &mut waypoints,
+            &mut joys,
+            &mut stops,
+            &mut markers_seen,
+        );
+        let requested = statuses
+            .last()
+            .is_some_and(|s| s.target.as_deref() == Some("tv_monitor"));
+        if !requested
+            && n.subscription_count(&t.target) > 0
+            && target_sent.is_none_or(|t| t.elapsed() > Duration::from_secs(2))
+        {
+            target_pub
+                .publish(RosString {
+                    data: "find the television".into(),
+                })
+                .unwrap();
+            target_sent = Some(Instant::now());
+        }
+        if let Some(s) = statuses.last()
+            && let Some(m) = &s.active_mission
+            && m.kind == "nav_to_object"
+            && let Some(w) = waypoints.iter().rev().find(|w| {
+                (w.point.x - m.waypoint[0]).abs() < 1e-9 && (w.point.y - m.waypoint[1]).abs() < 1e-9
+            })
+        {
+            break w.clone();
+        }
+    };
+    assert_eq!(nav.header.frame_id, "map");
+    // Within the standoff (0.45 m) plus a cell of the TV's bounds, inside the room.
+    let (tx, ty) = (nav.point.x.clamp(-1.2, -0.7), 1.875);
+    assert!(
+        (nav.point.x - tx).hypot(nav.point.y - ty) < 0.6,
+        "way point {:?} is not next to the TV",
+        nav.point
+    );
+    assert!(nav.point.x.abs() < 3.0 && nav.point.y.abs() < 2.0);
+    let joy = joys.first().expect("autonomy-mode /joy received");
+    assert_eq!(
+        joy.axes[2], -1.0,
+        "axes[2] = -1 switches the CMU planner to autonomy"
+    );
+    assert_eq!(joy.axes[4], 1.0);
+    assert!(stops.iter().all(|s| s.data == 0), "start releases /stop");
+    let s = statuses.last().unwrap();
+    assert_eq!(s.state, NodeState::Searching);
+    assert_eq!(s.request.as_deref(), Some("find the television"));
+    assert!(s.objects >= 1);
+    assert_eq!(s.last_decision.as_ref().unwrap().action, "nav_to_object");
+
+    // Phase 2: the "planner" drives the robot to the way point; the node
+    // computes arrival from odometry, verifies with a fresh scan and
+    // confirms the television.
+    let confirmed = loop {
+        assert!(
+            t0.elapsed() < Duration::from_secs(90),
+            "target not confirmed; last status {:?}",
+            statuses.last()
+        );
+        if !arrived {
+            robot_xy = (
+                nav.point.x,
+                nav.point.y,
+                (ty - nav.point.y).atan2(tx - nav.point.x),
+            );
+            arrived = true;
+        }
+        pump(
+            robot_xy,
+            &mut statuses,
+            &mut waypoints,
+            &mut joys,
+            &mut stops,
+            &mut markers_seen,
+        );
+        if let Some(c) = statuses.last().and_then(|s| s.confirmed.first().cloned()) {
+            break c;
+        }
+    };
+    assert_eq!(confirmed.category, "tv_monitor");
+    assert!(
+        (confirmed.centre[0] + 0.95).abs() < 0.1 && (confirmed.centre[1] - 1.875).abs() < 0.1,
+        "{confirmed:?}"
+    );
+    let s = statuses.last().unwrap();
+    assert_eq!(s.state, NodeState::Confirmed);
+    assert!(
+        s.bridge.observations >= 3 && s.bridge.rejected_messages == 0,
+        "{:?}",
+        s.bridge
+    );
+    assert!(s.bridge.registered_scans > 0 && s.bridge.terrain_maps > 0);
+    assert!(markers_seen > 0, "markers published");
+
+    // Shutdown publishes a hold way point and /stop = 2 (read while the
+    // node lingers: a volatile reader's samples go with their writer).
+    stop.store(true, Ordering::SeqCst);
+    let got_stop = wait_for(Duration::from_secs(5), || {
+        stops.extend(node::drain(&stop_sub, 100).0);
+        stops.iter().any(|s| s.data == 2).then_some(())
+    });
+    let confirmed_in_node = node_thread.join().unwrap();
+    assert_eq!(confirmed_in_node.len(), 1);
+    assert!(
+        got_stop.is_some(),
+        "shutdown publishes /stop = 2; got {stops:?}"
+    );
+}
