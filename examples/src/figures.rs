@@ -56,11 +56,12 @@ fn colour(i: usize) -> RGBColor {
 type Chart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// A 900 x 480 chart with a caption over `x` and `y`.
+/// A 900 x 480 chart with a caption: `categories` slots on x (slot `i` is
+/// `[i, i + 1)`, labelled at its centre) and `y` on the vertical axis.
 fn frame<'a, 'b>(
     root: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
     caption: &str,
-    x: std::ops::Range<f64>,
+    categories: usize,
     y: std::ops::Range<f64>,
 ) -> Result<Chart<'a, 'b>, FigureError> {
     root.fill(&WHITE).map_err(FigureError::draw)?;
@@ -69,7 +70,7 @@ fn frame<'a, 'b>(
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(48)
-        .build_cartesian_2d(x, y)
+        .build_cartesian_2d(0.0..categories as f64, y)
         .map_err(FigureError::draw)
 }
 
@@ -106,14 +107,17 @@ pub fn metrics_bars(path: &Path, summaries: &[VariantSummary]) -> Result<(), Fig
     let mut chart = frame(
         &root,
         "Success and path efficiency per variant",
-        0.0..metrics.len() as f64,
+        metrics.len(),
         0.0..100.0,
     )?;
     chart
         .configure_mesh()
         .disable_x_mesh()
-        .x_labels(metrics.len())
+        .x_labels(2 * metrics.len() + 1)
         .x_label_formatter(&|x| {
+            if (x - x.floor() - 0.5).abs() > 1e-6 {
+                return String::new();
+            }
             let i = x.floor() as usize;
             metrics.get(i).map_or(String::new(), |m| m.0.to_owned())
         })
@@ -152,14 +156,17 @@ pub fn success_by_distance(path: &Path, summaries: &[VariantSummary]) -> Result<
     let mut chart = frame(
         &root,
         "Same-floor success vs initial geodesic distance (Wilson 95 % CI)",
-        0.0..bins as f64,
+        bins,
         0.0..100.0,
     )?;
     chart
         .configure_mesh()
         .disable_x_mesh()
-        .x_labels(bins)
+        .x_labels(2 * bins + 1)
         .x_label_formatter(&|x| {
+            if (x - x.floor() - 0.5).abs() > 1e-6 {
+                return String::new();
+            }
             let i = x.floor() as usize;
             DISTANCE_BINS
                 .get(i)
@@ -225,14 +232,17 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
     let mut chart = frame(
         &root,
         "Outcome composition per variant",
-        0.0..summaries.len() as f64,
+        summaries.len(),
         0.0..100.0,
     )?;
     chart
         .configure_mesh()
         .disable_x_mesh()
-        .x_labels(summaries.len())
+        .x_labels(2 * summaries.len() + 1)
         .x_label_formatter(&|x| {
+            if (x - x.floor() - 0.5).abs() > 1e-6 {
+                return String::new();
+            }
             let i = x.floor() as usize;
             summaries
                 .get(i)

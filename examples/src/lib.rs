@@ -10,6 +10,8 @@
 //! * [`record`], [`summary`], [`report`], [`figures`], [`topdown`]: the
 //!   outputs (`episodes.jsonl`, `summary.json`, `report.md`, PNG figures
 //!   and top-down maps).
+//! * [`ros`]: the start-up shared by the ROS 2 binaries `sornav-robot` and
+//!   `sornav-simbot` (logging, Ctrl-C).
 //!
 //! These modules hold no navigation algorithm: the algorithms live in the
 //! `sornav-*` crates and the simulator in `sornav-platform-sim`.
@@ -23,6 +25,7 @@ pub mod harness;
 pub mod histogram;
 pub mod record;
 pub mod report;
+pub mod ros;
 pub mod scenes;
 pub mod summary;
 pub mod topdown;

@@ -556,6 +556,32 @@ pub fn encode_cloud<'v>(
     Ok(cloud)
 }
 
+/// A cloud in the [`xyzl_fields`] layout (little-endian) from
+/// `[x, y, z, label]` rows: what `/semantic_scan` publishers send.
+///
+/// # Errors
+/// As [`encode_cloud`] (only [`CloudError::TooLarge`] can occur).
+pub fn encode_xyzl(header: Header, rows: &[[f64; 4]]) -> Result<PointCloud2, CloudError> {
+    encode_cloud(
+        header,
+        &xyzl_fields(),
+        16,
+        false,
+        rows.iter().map(|r| &r[..]),
+    )
+}
+
+/// A cloud in PCL's padded [`xyzi_fields`] layout (little-endian) from
+/// `[x, y, z, intensity]` rows: what the CMU stack sends on
+/// `/registered_scan` and `/terrain_map`.
+///
+/// # Errors
+/// As [`encode_cloud`] (only [`CloudError::TooLarge`] can occur).
+pub fn encode_xyzi(header: Header, rows: &[[f64; 4]]) -> Result<PointCloud2, CloudError> {
+    let (fields, step) = xyzi_fields();
+    encode_cloud(header, &fields, step, false, rows.iter().map(|r| &r[..]))
+}
+
 /// The packed `x y z label` layout of `/semantic_scan` as published by
 /// this crate: three `FLOAT32` and a `UINT32` label, 16 bytes (PCL's
 /// `PointXYZL`; the decoder accepts a label of any datatype).

@@ -10,80 +10,25 @@ use sornav_platform_scout::bridge::{
 use sornav_platform_scout::config::ScoutConfig;
 use sornav_platform_scout::markers::NAMESPACES;
 use sornav_platform_scout::msg::*;
-use sornav_platform_scout::pointcloud::{encode_cloud, xyzi_fields, xyzl_fields};
+use sornav_platform_scout::pointcloud::{encode_xyzi, encode_xyzl};
 
-const LIDAR_Z: f64 = 0.55;
+mod common;
+use common::room;
 
 fn ms(t: u64) -> Duration {
     Duration::from_millis(t)
 }
 
-/// The test room of `dds_loopback.rs`: walls (1), floor (2) and a TV (15)
-/// sampled at voxel centres.
-fn room() -> Vec<[f64; 4]> {
-    let mut pts = Vec::new();
-    for i in -60..=60 {
-        for h in 0..18 {
-            let (x, z) = (f64::from(i) * 0.05, f64::from(h) * 0.05);
-            pts.push([x, 2.0, z, 1.0]);
-            pts.push([x, -2.0, z, 1.0]);
-        }
-    }
-    for j in -40..=40 {
-        let y = f64::from(j) * 0.05;
-        for h in 0..18 {
-            let z = f64::from(h) * 0.05;
-            pts.push([-3.0, y, z, 1.0]);
-            if y.abs() > 0.6 {
-                pts.push([3.0, y, z, 1.0]);
-            }
-        }
-        for i in -55..=55 {
-            pts.push([f64::from(i) * 0.05, y, 0.0, 2.0]);
-        }
-    }
-    for a in 0..10 {
-        for b in 0..6 {
-            pts.push([
-                -1.175 + f64::from(a) * 0.05,
-                1.875,
-                0.575 + f64::from(b) * 0.05,
-                15.0,
-            ]);
-        }
-    }
-    pts
-}
-
 fn semantic(pts: &[[f64; 4]]) -> PointCloud2 {
-    encode_cloud(
-        Header::new(Time::default(), "map"),
-        &xyzl_fields(),
-        16,
-        false,
-        pts.iter().map(|p| &p[..]),
-    )
-    .unwrap()
+    encode_xyzl(Header::new(Time::default(), "map"), pts).unwrap()
 }
 
 fn xyzi(pts: &[[f64; 4]], frame: &str) -> PointCloud2 {
-    let (f, step) = xyzi_fields();
-    encode_cloud(
-        Header::new(Time::default(), frame),
-        &f,
-        step,
-        false,
-        pts.iter().map(|p| &p[..]),
-    )
-    .unwrap()
+    encode_xyzi(Header::new(Time::default(), frame), pts).unwrap()
 }
 
 fn odom(x: f64, y: f64, yaw: f64) -> Odometry {
-    let mut o = Odometry::default();
-    o.header.frame_id = "map".into();
-    o.pose.pose.position = Point::new(x, y, LIDAR_Z);
-    o.pose.pose.orientation = Quaternion::from_yaw(yaw);
-    o
+    common::odometry(Header::new(Time::default(), "map"), x, y, yaw)
 }
 
 fn config() -> ScoutConfig {

@@ -16,64 +16,26 @@ use sornav_platform_scout::contract::Qos;
 use sornav_platform_scout::msg::*;
 use sornav_platform_scout::netns;
 use sornav_platform_scout::node::{self, RobotNode};
-use sornav_platform_scout::pointcloud::{encode_cloud, xyzi_fields, xyzl_fields};
+use sornav_platform_scout::pointcloud::{encode_xyzi, encode_xyzl};
+
+mod common;
+use common::room;
 
 /// A private domain id (ROS 2 allows 0-232; 0 is the default to avoid).
 const DOMAIN: u16 = 171;
-const LIDAR_Z: f64 = 0.55;
 
-/// A 6 m x 4 m room centred on the origin with a doorway in the east wall,
-/// a floor and a television (label 15) on the north wall: (x, y, z, label).
-fn room() -> Vec<[f64; 4]> {
-    let mut pts = Vec::new();
-    for i in -60..=60 {
-        for h in 0..18 {
-            let (x, z) = (f64::from(i) * 0.05, f64::from(h) * 0.05);
-            pts.push([x, 2.0, z, 1.0]);
-            pts.push([x, -2.0, z, 1.0]);
-        }
-    }
-    for j in -40..=40 {
-        let y = f64::from(j) * 0.05;
-        for h in 0..18 {
-            let z = f64::from(h) * 0.05;
-            pts.push([-3.0, y, z, 1.0]);
-            if y.abs() > 0.6 {
-                pts.push([3.0, y, z, 1.0]);
-            }
-        }
-        for i in -55..=55 {
-            pts.push([f64::from(i) * 0.05, y, 0.0, 2.0]);
-        }
-    }
-    // Sampled at voxel centres (0.025 + k 0.05) so that f32 rounding never
-    // puts two samples in one voxel and none in the next.
-    for a in 0..10 {
-        for b in 0..6 {
-            let (x, z) = (-1.175 + f64::from(a) * 0.05, 0.575 + f64::from(b) * 0.05);
-            pts.push([x, 1.875, z, 15.0]);
-        }
-    }
-    pts
+/// What the test has received from the node so far.
+#[derive(Default)]
+struct Received {
+    statuses: Vec<Status>,
+    waypoints: Vec<PointStamped>,
+    joys: Vec<Joy>,
+    stops: Vec<Int8>,
+    markers: usize,
 }
 
 fn header() -> Header {
     Header::new(Time::now(), "map")
-}
-
-fn odometry(x: f64, y: f64, yaw: f64) -> Odometry {
-    Odometry {
-        header: header(),
-        child_frame_id: "sensor".into(),
-        pose: PoseWithCovariance {
-            pose: Pose {
-                position: Point::new(x, y, LIDAR_Z),
-                orientation: Quaternion::from_yaw(yaw),
-            },
-            covariance: [0.0; 36],
-        },
-        twist: TwistWithCovariance::default(),
-    }
 }
 
 fn wait_for<T>(timeout: Duration, mut f: impl FnMut() -> Option<T>) -> Option<T> {
@@ -126,58 +88,23 @@ fn waypoint_and_status_over_loopback() {
     let markers_sub = node::subscription::<MarkerArray>(&mut n, &t.markers, Qos::COMMAND).unwrap();
 
     let pts = room();
-    let semantic = encode_cloud(
-        header(),
-        &xyzl_fields(),
-        16,
-        false,
-        pts.iter().map(|p| &p[..]),
-    )
-    .unwrap();
-    let (xyzi, step) = xyzi_fields();
+    let semantic = encode_xyzl(header(), &pts).unwrap();
     // Registered scan: the same returns, intensity unused (PCL's padded XYZI).
     let reg_rows: Vec<[f64; 4]> = pts.iter().map(|p| [p[0], p[1], p[2], 0.0]).collect();
-    let registered = encode_cloud(
-        header(),
-        &xyzi,
-        step,
-        false,
-        reg_rows.iter().map(|p| &p[..]),
-    )
-    .unwrap();
+    let registered = encode_xyzi(header(), &reg_rows).unwrap();
     // Terrain map: intensity = height above the ground (the floor is z = 0).
-    let terrain = encode_cloud(
-        header(),
-        &xyzi,
-        step,
-        false,
-        reg_rows
-            .iter()
-            .map(|p| [p[0], p[1], p[2], p[2]])
-            .collect::<Vec<_>>()
-            .iter()
-            .map(|p| &p[..]),
-    )
-    .unwrap();
+    let ter_rows: Vec<[f64; 4]> = pts.iter().map(|p| [p[0], p[1], p[2], p[2]]).collect();
+    let terrain = encode_xyzi(header(), &ter_rows).unwrap();
 
     let mut robot_xy = (0.0, 0.0, 0.0);
-    let mut statuses: Vec<Status> = Vec::new();
-    let mut waypoints: Vec<PointStamped> = Vec::new();
-    let mut joys: Vec<Joy> = Vec::new();
-    let mut stops: Vec<Int8> = Vec::new();
-    let mut markers_seen = 0usize;
+    let mut rx = Received::default();
     let mut last_cloud = Instant::now() - Duration::from_secs(1);
     let mut target_sent: Option<Instant> = None;
     let mut arrived = false;
     let t0 = Instant::now();
-    let mut pump = |robot_xy: (f64, f64, f64),
-                    statuses: &mut Vec<Status>,
-                    waypoints: &mut Vec<PointStamped>,
-                    joys: &mut Vec<Joy>,
-                    stops: &mut Vec<Int8>,
-                    markers_seen: &mut usize| {
+    let mut pump = |(x, y, yaw): (f64, f64, f64), rx: &mut Received| {
         odom_pub
-            .publish(odometry(robot_xy.0, robot_xy.1, robot_xy.2))
+            .publish(common::odometry(header(), x, y, yaw))
             .unwrap();
         if last_cloud.elapsed() > Duration::from_millis(200) {
             last_cloud = Instant::now();
@@ -185,16 +112,16 @@ fn waypoint_and_status_over_loopback() {
             reg_pub.publish(registered.clone()).unwrap();
             ter_pub.publish(terrain.clone()).unwrap();
         }
-        statuses.extend(
+        rx.statuses.extend(
             node::drain(&status_sub, 100)
                 .0
                 .iter()
                 .map(|s| serde_json::from_str::<Status>(&s.data).expect("status is Status JSON")),
         );
-        waypoints.extend(node::drain(&way_sub, 100).0);
-        joys.extend(node::drain(&joy_sub, 100).0);
-        stops.extend(node::drain(&stop_sub, 100).0);
-        *markers_seen += node::drain(&markers_sub, 100).0.len();
+        rx.waypoints.extend(node::drain(&way_sub, 100).0);
+        rx.joys.extend(node::drain(&joy_sub, 100).0);
+        rx.stops.extend(node::drain(&stop_sub, 100).0);
+        rx.markers += node::drain(&markers_sub, 100).0.len();
         thread::sleep(Duration::from_millis(50));
     };
 
@@ -204,17 +131,11 @@ fn waypoint_and_status_over_loopback() {
         assert!(
             t0.elapsed() < Duration::from_secs(60),
             "no NAV_TO_OBJECT way point; statuses: {:?}",
-            statuses.last()
+            rx.statuses.last()
         );
-        pump(
-            robot_xy,
-            &mut statuses,
-            &mut waypoints,
-            &mut joys,
-            &mut stops,
-            &mut markers_seen,
-        );
-        let requested = statuses
+        pump(robot_xy, &mut rx);
+        let requested = rx
+            .statuses
             .last()
             .is_some_and(|s| s.target.as_deref() == Some("tv_monitor"));
         if !requested
@@ -228,10 +149,10 @@ fn waypoint_and_status_over_loopback() {
                 .unwrap();
             target_sent = Some(Instant::now());
         }
-        if let Some(s) = statuses.last()
+        if let Some(s) = rx.statuses.last()
             && let Some(m) = &s.active_mission
             && m.kind == "nav_to_object"
-            && let Some(w) = waypoints.iter().rev().find(|w| {
+            && let Some(w) = rx.waypoints.iter().rev().find(|w| {
                 (w.point.x - m.waypoint[0]).abs() < 1e-9 && (w.point.y - m.waypoint[1]).abs() < 1e-9
             })
         {
@@ -247,14 +168,14 @@ fn waypoint_and_status_over_loopback() {
         nav.point
     );
     assert!(nav.point.x.abs() < 3.0 && nav.point.y.abs() < 2.0);
-    let joy = joys.first().expect("autonomy-mode /joy received");
+    let joy = rx.joys.first().expect("autonomy-mode /joy received");
     assert_eq!(
         joy.axes[2], -1.0,
         "axes[2] = -1 switches the CMU planner to autonomy"
     );
     assert_eq!(joy.axes[4], 1.0);
-    assert!(stops.iter().all(|s| s.data == 0), "start releases /stop");
-    let s = statuses.last().unwrap();
+    assert!(rx.stops.iter().all(|s| s.data == 0), "start releases /stop");
+    let s = rx.statuses.last().unwrap();
     assert_eq!(s.state, NodeState::Searching);
     assert_eq!(s.request.as_deref(), Some("find the television"));
     assert!(s.objects >= 1);
@@ -267,7 +188,7 @@ fn waypoint_and_status_over_loopback() {
         assert!(
             t0.elapsed() < Duration::from_secs(90),
             "target not confirmed; last status {:?}",
-            statuses.last()
+            rx.statuses.last()
         );
         if !arrived {
             robot_xy = (
@@ -277,15 +198,12 @@ fn waypoint_and_status_over_loopback() {
             );
             arrived = true;
         }
-        pump(
-            robot_xy,
-            &mut statuses,
-            &mut waypoints,
-            &mut joys,
-            &mut stops,
-            &mut markers_seen,
-        );
-        if let Some(c) = statuses.last().and_then(|s| s.confirmed.first().cloned()) {
+        pump(robot_xy, &mut rx);
+        if let Some(c) = rx
+            .statuses
+            .last()
+            .and_then(|s| s.confirmed.first().cloned())
+        {
             break c;
         }
     };
@@ -294,7 +212,7 @@ fn waypoint_and_status_over_loopback() {
         (confirmed.centre[0] + 0.95).abs() < 0.1 && (confirmed.centre[1] - 1.875).abs() < 0.1,
         "{confirmed:?}"
     );
-    let s = statuses.last().unwrap();
+    let s = rx.statuses.last().unwrap();
     assert_eq!(s.state, NodeState::Confirmed);
     assert!(
         s.bridge.observations >= 3 && s.bridge.rejected_messages == 0,
@@ -302,19 +220,20 @@ fn waypoint_and_status_over_loopback() {
         s.bridge
     );
     assert!(s.bridge.registered_scans > 0 && s.bridge.terrain_maps > 0);
-    assert!(markers_seen > 0, "markers published");
+    assert!(rx.markers > 0, "markers published");
 
     // Shutdown publishes a hold way point and /stop = 2 (read while the
     // node lingers: a volatile reader's samples go with their writer).
     stop.store(true, Ordering::SeqCst);
     let got_stop = wait_for(Duration::from_secs(5), || {
-        stops.extend(node::drain(&stop_sub, 100).0);
-        stops.iter().any(|s| s.data == 2).then_some(())
+        rx.stops.extend(node::drain(&stop_sub, 100).0);
+        rx.stops.iter().any(|s| s.data == 2).then_some(())
     });
     let confirmed_in_node = node_thread.join().unwrap();
     assert_eq!(confirmed_in_node.len(), 1);
     assert!(
         got_stop.is_some(),
-        "shutdown publishes /stop = 2; got {stops:?}"
+        "shutdown publishes /stop = 2; got {:?}",
+        rx.stops
     );
 }

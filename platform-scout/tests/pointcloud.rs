@@ -6,7 +6,8 @@
 use proptest::prelude::*;
 use sornav_platform_scout::msg::{Header, PointCloud2, PointField};
 use sornav_platform_scout::pointcloud::{
-    CloudError, CloudView, Datatype, FieldSpec, encode_cloud, xyzi_fields, xyzl_fields,
+    CloudError, CloudView, Datatype, FieldSpec, encode_cloud, encode_xyzi, encode_xyzl,
+    xyzi_fields, xyzl_fields,
 };
 
 fn field(name: &str, offset: u32, datatype: u8) -> PointField {
@@ -43,14 +44,7 @@ fn put(buf: &mut [u8], offset: usize, t: Datatype, big: bool, v: f64) {
 #[test]
 fn packed_xyz_label() {
     let rows = [[1.0, 2.0, 3.0, 14.0], [-1.5, 0.25, 0.0, 2.0]];
-    let cloud = encode_cloud(
-        Header::default(),
-        &xyzl_fields(),
-        16,
-        false,
-        rows.iter().map(|r| &r[..]),
-    )
-    .unwrap();
+    let cloud = encode_xyzl(Header::default(), &rows).unwrap();
     assert_eq!(
         (cloud.point_step, cloud.row_step, cloud.data.len()),
         (16, 32, 32)
@@ -69,17 +63,9 @@ fn packed_xyz_label() {
 
 #[test]
 fn padded_xyzi_like_pcl() {
-    let (fields, step) = xyzi_fields();
-    assert_eq!(step, 32);
-    let rows = [[1.0, 2.0, 3.0, 0.5]];
-    let cloud = encode_cloud(
-        Header::default(),
-        &fields,
-        step,
-        false,
-        rows.iter().map(|r| &r[..]),
-    )
-    .unwrap();
+    assert_eq!(xyzi_fields().1, 32);
+    let cloud = encode_xyzi(Header::default(), &[[1.0, 2.0, 3.0, 0.5]]).unwrap();
+    assert_eq!((cloud.point_step, cloud.row_step), (32, 32));
     // Bytes 12..16 (padding) and 20..32 are zero.
     assert!(
         cloud.data[12..16]
@@ -170,14 +156,7 @@ fn invalid_points_and_labels_are_counted_not_fused() {
         [0.0, f64::INFINITY, 0.0, 1.0],
         [1.0, 1.0, 1.0, 2.0],
     ];
-    let cloud = encode_cloud(
-        Header::default(),
-        &xyzl_fields(),
-        16,
-        false,
-        rows.iter().map(|r| &r[..]),
-    )
-    .unwrap();
+    let cloud = encode_xyzl(Header::default(), &rows).unwrap();
     assert!(!cloud.is_dense);
     let l = CloudView::new(&cloud)
         .unwrap()
@@ -215,14 +194,7 @@ fn invalid_points_and_labels_are_counted_not_fused() {
 
 fn base_cloud() -> PointCloud2 {
     let rows = [[1.0, 2.0, 3.0, 4.0], [5.0, 6.0, 7.0, 8.0]];
-    encode_cloud(
-        Header::default(),
-        &xyzl_fields(),
-        16,
-        false,
-        rows.iter().map(|r| &r[..]),
-    )
-    .unwrap()
+    encode_xyzl(Header::default(), &rows).unwrap()
 }
 
 #[test]

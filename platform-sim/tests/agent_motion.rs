@@ -5,30 +5,13 @@ use std::sync::OnceLock;
 use nalgebra::Point3;
 use proptest::prelude::*;
 use sornav_platform_sim::agent::{Action, Agent, AgentConfig, wrap_angle};
-use sornav_platform_sim::procedural::ProceduralConfig;
-use sornav_platform_sim::{CameraConfig, NavMesh, Scene, SimConfig, Simulator};
+use sornav_platform_sim::{NavMesh, Simulator};
+
+mod common;
 
 fn sim() -> &'static Simulator {
     static SIM: OnceLock<Simulator> = OnceLock::new();
-    SIM.get_or_init(|| {
-        let scene = Scene::procedural(
-            11,
-            &ProceduralConfig {
-                floors: Some(2),
-                ..ProceduralConfig::default()
-            },
-        )
-        .unwrap();
-        let config = SimConfig {
-            camera: CameraConfig {
-                width: 64,
-                height: 48,
-                ..CameraConfig::default()
-            },
-            ..SimConfig::default()
-        };
-        Simulator::new(scene, config).unwrap()
-    })
+    SIM.get_or_init(|| common::simulator(common::house(11, 2), 64, 48))
 }
 
 fn span_point(nav: &NavMesh, pick: f64) -> Point3<f64> {

@@ -6,7 +6,9 @@ use nalgebra::{Point3, Vector3};
 use proptest::prelude::*;
 use sornav_platform_sim::episodes::generator::body_distance;
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
-use sornav_platform_sim::{CameraConfig, Episode, ProceduralConfig, Scene, SimConfig, Simulator};
+use sornav_platform_sim::{Episode, ProceduralConfig, Scene, Simulator};
+
+mod common;
 
 /// Whether some ray from `eye` to one of the 27 sample points of the
 /// object's bounds first hits the object (parry's ray cast on the scene).
@@ -113,8 +115,7 @@ proptest! {
             },
         )
         .unwrap();
-        let camera = CameraConfig { width: 32, height: 24, ..CameraConfig::default() };
-        let sim = Simulator::new(scene, SimConfig { camera, ..SimConfig::default() }).unwrap();
+        let sim = common::simulator(scene, 32, 24);
         let cfg = GeneratorConfig { episodes_per_category: 1, seed, ..GeneratorConfig::default() };
         let episodes = generate_episodes(&sim, &cfg).unwrap();
         prop_assert!(!episodes.is_empty(), "house {house}: no episodes");
@@ -138,19 +139,7 @@ fn the_checker_rejects_broken_episodes() {
         },
     )
     .unwrap();
-    let camera = CameraConfig {
-        width: 32,
-        height: 24,
-        ..CameraConfig::default()
-    };
-    let sim = Simulator::new(
-        scene,
-        SimConfig {
-            camera,
-            ..SimConfig::default()
-        },
-    )
-    .unwrap();
+    let sim = common::simulator(scene, 32, 24);
     let cfg = GeneratorConfig {
         episodes_per_category: 1,
         ..GeneratorConfig::default()

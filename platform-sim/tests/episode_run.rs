@@ -5,22 +5,16 @@ use nalgebra::Point3;
 use sornav_platform_sim::episodes::generator::body_distance;
 use sornav_platform_sim::episodes::{GeneratorConfig, HabitatDataset, generate_episodes};
 use sornav_platform_sim::metrics::{Outcome, Summary};
-use sornav_platform_sim::procedural::ProceduralConfig;
 use sornav_platform_sim::{
     CameraConfig, Episode, Oracle, Policy, RandomWalk, RunConfig, Scene, SimConfig, Simulator,
     StopAtOnce, run_episode,
 };
 
+mod common;
+
+/// The simulator of these tests: a 160 x 120 camera.
 fn simulator(scene: Scene) -> Simulator {
-    let config = SimConfig {
-        camera: CameraConfig {
-            width: 160,
-            height: 120,
-            ..CameraConfig::default()
-        },
-        ..SimConfig::default()
-    };
-    Simulator::new(scene, config).unwrap()
+    common::simulator(scene, 160, 120)
 }
 
 /// Every episode satisfies the generator's own constraints, checked with
@@ -190,15 +184,7 @@ fn procedural_houses_oracle_and_stop() {
     };
     let mut total = 0;
     for (seed, floors) in [(1u64, 1u32), (2, 2)] {
-        let scene = Scene::procedural(
-            seed,
-            &ProceduralConfig {
-                floors: Some(floors),
-                ..ProceduralConfig::default()
-            },
-        )
-        .unwrap();
-        let sim = simulator(scene);
+        let sim = simulator(common::house(seed, floors));
         let episodes = generate_episodes(&sim, &config).unwrap();
         assert!(
             episodes.len() >= 4,
@@ -305,23 +291,8 @@ fn shared_homes_across_floors_oracle() {
 
 #[test]
 fn random_walk_hits_the_step_limit_and_taxonomy_holds() {
-    let scene = Scene::procedural(
-        4,
-        &ProceduralConfig {
-            floors: Some(1),
-            ..ProceduralConfig::default()
-        },
-    )
-    .unwrap();
-    let sim = simulator(scene);
-    let episodes = generate_episodes(
-        &sim,
-        &GeneratorConfig {
-            episodes_per_category: 1,
-            ..GeneratorConfig::default()
-        },
-    )
-    .unwrap();
+    let sim = simulator(common::house(4, 1));
+    let episodes = common::one_episode_per_category(&sim);
     let config = RunConfig {
         max_actions: 60,
         ..RunConfig::default()
@@ -389,15 +360,7 @@ fn ratio_filter_thins_near_straight_line_episodes() {
     let mut near_one = [0usize; 2];
     let mut total = [0usize; 2];
     for seed in [1u64, 2] {
-        let scene = Scene::procedural(
-            seed,
-            &ProceduralConfig {
-                floors: Some(1),
-                ..ProceduralConfig::default()
-            },
-        )
-        .unwrap();
-        let sim = simulator(scene);
+        let sim = simulator(common::house(seed, 1));
         for (k, ratio) in [0.0, 1.1].into_iter().enumerate() {
             let config = GeneratorConfig {
                 episodes_per_category: 20,
@@ -430,23 +393,8 @@ fn default_rules_are_habitats() {
     assert_eq!(c.wall_clock_s, 120.0);
     assert_eq!(c.success_distance, 0.1);
     assert_eq!(c.object_distance, 1.0);
-    let scene = Scene::procedural(
-        4,
-        &ProceduralConfig {
-            floors: Some(1),
-            ..ProceduralConfig::default()
-        },
-    )
-    .unwrap();
-    let sim = simulator(scene);
-    let episodes = generate_episodes(
-        &sim,
-        &GeneratorConfig {
-            episodes_per_category: 1,
-            ..GeneratorConfig::default()
-        },
-    )
-    .unwrap();
+    let sim = simulator(common::house(4, 1));
+    let episodes = common::one_episode_per_category(&sim);
     let r = run_episode(&sim, &episodes[0], &mut RandomWalk::new(3), &c).unwrap();
     assert_eq!(r.actions, 500);
     assert!(matches!(

@@ -4,6 +4,8 @@ use nalgebra::Point3;
 use proptest::prelude::*;
 use sornav_platform_sim::render::{Bvh, Camera, CameraConfig, CameraPose, NO_INSTANCE};
 
+mod common;
+
 const ROOM: ([f64; 3], [f64; 3]) = ([0.0, 0.0, 0.0], [6.0, 4.0, 2.6]);
 const OBJECT: ([f64; 3], [f64; 3]) = ([3.5, 1.5, 0.0], [4.5, 2.5, 0.8]);
 const FLOOR: u32 = 1;
@@ -392,16 +394,8 @@ proptest! {
 /// parry's independent ray cast (`Scene::cast_ray`) on a procedural house.
 #[test]
 fn camera_matches_parry_on_a_procedural_house() {
-    use sornav_platform_sim::procedural::ProceduralConfig;
-    use sornav_platform_sim::{NavMesh, NavMeshConfig, Scene};
-    let scene = Scene::procedural(
-        5,
-        &ProceduralConfig {
-            floors: Some(2),
-            ..ProceduralConfig::default()
-        },
-    )
-    .unwrap();
+    use sornav_platform_sim::{NavMesh, NavMeshConfig};
+    let scene = common::house(5, 2);
     let nav = NavMesh::build(&scene, &NavMeshConfig::default()).unwrap();
     let config = CameraConfig {
         width: 64,
@@ -453,16 +447,8 @@ fn camera_matches_parry_on_a_procedural_house() {
 /// the surfaces they see.
 #[test]
 fn noise_invariants_and_unprojection() {
-    use sornav_platform_sim::procedural::ProceduralConfig;
-    use sornav_platform_sim::{NavMesh, NavMeshConfig, Scene};
-    let scene = Scene::procedural(
-        2,
-        &ProceduralConfig {
-            floors: Some(1),
-            ..ProceduralConfig::default()
-        },
-    )
-    .unwrap();
+    use sornav_platform_sim::{NavMesh, NavMeshConfig};
+    let scene = common::house(2, 1);
     let nav = NavMesh::build(&scene, &NavMeshConfig::default()).unwrap();
     let base = CameraConfig {
         width: 96,

@@ -5,37 +5,20 @@
 use std::sync::OnceLock;
 use std::time::Duration;
 
-use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
 use sornav_platform_sim::metrics::Outcome;
-use sornav_platform_sim::procedural::ProceduralConfig;
 use sornav_platform_sim::{
-    Action, Episode, Observation, Oracle, Policy, RunConfig, Scene, SimConfig, Simulator,
-    run_episode,
+    Action, Episode, Observation, Oracle, Policy, RunConfig, SimConfig, Simulator, run_episode,
 };
+
+mod common;
 
 /// A one-floor house and one of its episodes (same floor as its goal, so the
 /// taxonomy cannot report it as cross-floor).
 fn setup() -> &'static (Simulator, Episode) {
     static S: OnceLock<(Simulator, Episode)> = OnceLock::new();
     S.get_or_init(|| {
-        let scene = Scene::procedural(
-            2,
-            &ProceduralConfig {
-                floors: Some(1),
-                ..ProceduralConfig::default()
-            },
-        )
-        .unwrap();
-        let sim = Simulator::new(scene, SimConfig::default()).unwrap();
-        let episodes = generate_episodes(
-            &sim,
-            &GeneratorConfig {
-                episodes_per_category: 1,
-                ..GeneratorConfig::default()
-            },
-        )
-        .unwrap();
-        let e = episodes
+        let sim = Simulator::new(common::house(2, 1), SimConfig::default()).unwrap();
+        let e = common::one_episode_per_category(&sim)
             .into_iter()
             .find(|e| e.cross_floor == Some(false))
             .expect("a same-floor episode");

@@ -3,8 +3,10 @@
 use std::path::{Path, PathBuf};
 
 use sornav_platform_sim::sh3d::{Sh3dOptions, home_from_xml_str, load_sh3d};
-use sornav_platform_sim::{NavError, NavMesh, NavMeshConfig, ProceduralConfig, Scene, SceneError};
+use sornav_platform_sim::{NavError, NavMesh, NavMeshConfig, Scene, SceneError};
 use sornav_test_support::shared_data;
+
+mod common;
 
 fn models() -> PathBuf {
     shared_data("sh3d-homes/models").unwrap_or_else(|| PathBuf::from("/nonexistent"))
@@ -231,14 +233,7 @@ fn broken_archives_are_zip_errors() {
 
 #[test]
 fn nav_queries_reject_nan_and_off_mesh_points() {
-    let scene = Scene::procedural(
-        1,
-        &ProceduralConfig {
-            floors: Some(1),
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let scene = common::house(1, 1);
     let nav = NavMesh::build(&scene, &NavMeshConfig::default()).unwrap();
     let nan = nalgebra::Point3::new(f64::NAN, 0.0, 0.0);
     assert!(!nav.is_navigable(&nan));

@@ -6,19 +6,14 @@ use std::sync::OnceLock;
 use nalgebra::{Point2, Point3};
 use proptest::prelude::*;
 use sornav_platform_sim::geometry::MeshBuilder;
-use sornav_platform_sim::{InstanceKind, Level, NavMesh, NavMeshConfig, ProceduralConfig, Scene};
+use sornav_platform_sim::{InstanceKind, Level, NavMesh, NavMeshConfig, Scene};
+
+mod common;
 
 fn house() -> &'static (Scene, NavMesh) {
     static H: OnceLock<(Scene, NavMesh)> = OnceLock::new();
     H.get_or_init(|| {
-        let s = Scene::procedural(
-            11,
-            &ProceduralConfig {
-                floors: Some(2),
-                ..Default::default()
-            },
-        )
-        .unwrap();
+        let s = common::house(11, 2);
         let n = NavMesh::build(&s, &NavMeshConfig::default()).unwrap();
         (s, n)
     })
@@ -324,6 +319,16 @@ fn world(boxes: &[[f64; 6]], ramps: &[(f64, f64, f64, f64, f64)]) -> Scene {
     Scene::from_description(b.finish("world", vec![level], vec![])).unwrap()
 }
 
+/// No erosion (agent radius 0); islands of at least `min_region_area`
+/// (m^2) kept.
+fn unshrunk(min_region_area: f64) -> NavMeshConfig {
+    NavMeshConfig {
+        agent_radius: 0.0,
+        min_region_area,
+        ..Default::default()
+    }
+}
+
 /// Surfaces steeper than 45 deg are not walkable; gentler ones are, at the
 /// surface's height.
 #[test]
@@ -332,11 +337,7 @@ fn slopes_up_to_45_degrees_are_walkable() {
         &[],
         &[(0.5, 0.5, 1.0, 1.0, 40.0), (3.5, 0.5, 1.0, 1.0, 50.0)],
     );
-    let cfg = NavMeshConfig {
-        agent_radius: 0.0,
-        min_region_area: 0.0,
-        ..Default::default()
-    };
+    let cfg = unshrunk(0.0);
     let nav = NavMesh::build(&scene, &cfg).unwrap();
     // The column 0.50-0.55 m up the run (cells start at multiples of 0.05 m
     // from the scene's bounds): its surface is the ramp's highest point there.
@@ -373,11 +374,7 @@ fn clearance_needs_the_agent_height() {
         ],
         &[],
     );
-    let cfg = NavMeshConfig {
-        agent_radius: 0.0,
-        min_region_area: 0.0,
-        ..Default::default()
-    };
+    let cfg = unshrunk(0.0);
     let nav = NavMesh::build(&scene, &cfg).unwrap();
     let low = nav.heights_at(1.025, 1.025);
     let high = nav.heights_at(3.025, 1.025);
@@ -405,11 +402,7 @@ fn small_islands_are_discarded() {
         ],
         &[],
     );
-    let cfg = NavMeshConfig {
-        agent_radius: 0.0,
-        min_region_area: 1.0,
-        ..Default::default()
-    };
+    let cfg = unshrunk(1.0);
     let nav = NavMesh::build(&scene, &cfg).unwrap();
     let top = |x: f64, y: f64| nav.heights_at(x, y).iter().any(|z| (z - 0.5).abs() < 1e-4);
     assert!(!top(0.925, 0.925), "small island kept");

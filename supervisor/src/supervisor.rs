@@ -345,6 +345,9 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
             Some(k) => match clusters.iter().find(|c| c.candidate.cluster_id == k) {
                 Some(c) => {
                     self.stats.relocations += 1;
+                    // The relocation may start and end between two steps:
+                    // its end is detected at the next step either way.
+                    self.previous_kind = Some(MissionKind::Relocate);
                     SupervisorCommand::Relocate {
                         cluster_id: k,
                         waypoint: c.waypoint,

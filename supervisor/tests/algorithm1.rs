@@ -171,6 +171,8 @@ proptest! {
                         let is_expected = matches!(&got, SupervisorCommand::Relocate { cluster_id, waypoint, .. }
                             if *cluster_id == c.candidate.cluster_id && *waypoint == c.waypoint);
                         prop_assert!(is_expected, "{:?}", got);
+                        // A commanded relocation counts as under way.
+                        previous = Some(MissionKind::Relocate);
                     }
                     _ => {
                         let is_expected = matches!(&got, SupervisorCommand::Explore { frontier: f, .. } if *f == frontier);
@@ -314,8 +316,18 @@ fn the_region_reached_by_a_relocation_is_explored_first() {
         calls + 1,
         "the policy runs again after the dwell"
     );
+    // That relocation starts and ends between two steps (its waypoint is
+    // within the arrival radius): its end still starts the dwell.
+    assert!(matches!(
+        step(&mut sup, 16.0, MissionKind::Idle),
+        SupervisorCommand::ExploreNewRegion { .. }
+    ));
+    assert!(matches!(
+        step(&mut sup, 21.0, MissionKind::Idle),
+        SupervisorCommand::Relocate { .. }
+    ));
     // Target evidence still pre-empts the dwell.
-    step(&mut sup, 16.0, MissionKind::Relocate);
+    step(&mut sup, 22.0, MissionKind::Relocate);
     let input = StepInput {
         target: "toilet",
         target_accepted: Some(7),
@@ -326,7 +338,7 @@ fn the_region_reached_by_a_relocation_is_explored_first() {
         first_frontier: frontier,
     };
     assert_eq!(
-        sup.step(17.0, &input, RegionContext::default).unwrap(),
+        sup.step(23.0, &input, RegionContext::default).unwrap(),
         SupervisorCommand::NavToObject { target_id: 7 }
     );
 }

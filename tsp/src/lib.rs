@@ -64,6 +64,8 @@ mod horizon;
 mod local_search;
 mod matrix;
 mod solver;
+#[cfg(test)]
+mod test_rng;
 pub mod tsplib;
 
 pub use error::TspError;

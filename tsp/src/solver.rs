@@ -554,16 +554,7 @@ pub fn nearest_neighbour_route(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    fn lcg(seed: u64) -> impl FnMut() -> f64 {
-        let mut s = seed | 1;
-        move || {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (s >> 33) as f64 / (1u64 << 31) as f64
-        }
-    }
+    use crate::test_rng::lcg;
 
     #[test]
     fn kick_budget_and_its_validation() {

@@ -17,11 +17,11 @@
 #![forbid(unsafe_code)]
 
 use std::path::PathBuf;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::Duration;
 
 use clap::Parser;
+use sornav_examples::ros;
 use sornav_platform_scout::config::ScoutConfig;
 use sornav_platform_scout::node::RobotNode;
 
@@ -57,12 +57,7 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+    ros::init_logging();
     let args = Args::parse();
     if args.print_config {
         print!("{}", ScoutConfig::EXAMPLE);
@@ -79,12 +74,7 @@ fn run() -> Result<(), String> {
         config.ros.domain_id = d;
     }
     config.validate().map_err(|e| e.to_string())?;
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = Arc::clone(&stop);
-        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
-            .map_err(|e| e.to_string())?;
-    }
+    let stop = ros::stop_on_ctrl_c().map_err(|e| e.to_string())?;
     let mut robot = RobotNode::new(config).map_err(|e| e.to_string())?;
     tracing::info!("sornav-robot running; Ctrl-C to stop");
     let every = (args.status_every_s > 0.0).then(|| Duration::from_secs_f64(args.status_every_s));

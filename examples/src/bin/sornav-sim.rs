@@ -48,7 +48,7 @@ enum Command {
 struct RunArgs {
     /// Scenes (repeatable): `procedural:N`, `procedural-shuffled:N`, a Sweet
     /// Home 3D `.xml` / `.sh3d` file or a directory of them, a `.glb` /
-    /// `.gltf`. Default: `procedural:12`.
+    /// `.gltf`. Default: `procedural:25`.
     #[arg(long = "scenes", value_name = "SPEC")]
     scenes: Vec<String>,
     /// Sweet Home 3D model directory (default
@@ -152,7 +152,7 @@ fn default_models() -> Option<PathBuf> {
 
 fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
     let specs = if a.scenes.is_empty() {
-        vec!["procedural:12".to_owned()]
+        vec!["procedural:25".to_owned()]
     } else {
         a.scenes.clone()
     };

@@ -25,19 +25,19 @@
 #[path = "simbot/world.rs"]
 mod world;
 
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::Ordering;
 use std::time::{Duration, Instant};
 
 use clap::Parser;
 use sornav::AgentConfig;
+use sornav_examples::ros;
 use sornav_platform_scout::contract::{Qos, Topics};
 use sornav_platform_scout::msg::{
     Header, Int8, Joy, Odometry, Point, PointCloud2, PointStamped, Pose, PoseWithCovariance,
     Quaternion, Time, TwistWithCovariance,
 };
 use sornav_platform_scout::node;
-use sornav_platform_scout::pointcloud::{encode_cloud, xyzi_fields, xyzl_fields};
+use sornav_platform_scout::pointcloud::{encode_xyzi, encode_xyzl};
 use sornav_platform_sim::{ProceduralConfig, Scene};
 
 use world::World;
@@ -139,27 +139,12 @@ fn clouds(world: &World, seed: u64) -> Result<(PointCloud2, PointCloud2, PointCl
         .iter()
         .map(|r| [r.p[0], r.p[1], r.p[2], f64::from(r.label)])
         .collect();
-    let semantic = encode_cloud(
-        header("map"),
-        &xyzl_fields(),
-        16,
-        false,
-        sem_rows.iter().map(|r| &r[..]),
-    )
-    .map_err(e)?;
-    let (xyzi, step) = xyzi_fields();
+    let semantic = encode_xyzl(header("map"), &sem_rows).map_err(e)?;
     let reg_rows: Vec<[f64; 4]> = returns
         .iter()
         .map(|r| [r.p[0], r.p[1], r.p[2], 0.0])
         .collect();
-    let registered = encode_cloud(
-        header("map"),
-        &xyzi,
-        step,
-        false,
-        reg_rows.iter().map(|r| &r[..]),
-    )
-    .map_err(e)?;
+    let registered = encode_xyzi(header("map"), &reg_rows).map_err(e)?;
     // Terrain: returns within 5 m, one per 0.1 m voxel, intensity = height
     // above the floor under the robot.
     let floor = world.position.z;
@@ -170,14 +155,7 @@ fn clouds(world: &World, seed: u64) -> Result<(PointCloud2, PointCloud2, PointCl
         .filter(|r| seen.insert(r.p.map(|c| (c * 10.0).floor() as i64)))
         .map(|r| [r.p[0], r.p[1], r.p[2], r.p[2] - floor])
         .collect();
-    let terrain = encode_cloud(
-        header("map"),
-        &xyzi,
-        step,
-        false,
-        ter_rows.iter().map(|r| &r[..]),
-    )
-    .map_err(e)?;
+    let terrain = encode_xyzi(header("map"), &ter_rows).map_err(e)?;
     Ok((semantic, registered, terrain))
 }
 
@@ -189,12 +167,7 @@ fn main() {
 }
 
 fn run() -> Result<(), String> {
-    tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
-        .with_writer(std::io::stderr)
-        .init();
+    ros::init_logging();
     let args = Args::parse();
     let house = ProceduralConfig {
         floors: Some(args.floors),
@@ -253,12 +226,7 @@ fn run() -> Result<(), String> {
     let joy_sub = node::subscription::<Joy>(&mut n, &t.joy, Qos::COMMAND).map_err(err)?;
     let stop_sub = node::subscription::<Int8>(&mut n, &t.stop, Qos::COMMAND).map_err(err)?;
 
-    let stop = Arc::new(AtomicBool::new(false));
-    {
-        let stop = Arc::clone(&stop);
-        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
-            .map_err(|e| e.to_string())?;
-    }
+    let stop = ros::stop_on_ctrl_c().map_err(|e| e.to_string())?;
     tracing::info!(
         seed = args.seed,
         x = world.position.x,

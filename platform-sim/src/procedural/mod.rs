@@ -178,6 +178,19 @@ impl Rect {
     fn overlaps(&self, o: &Rect) -> bool {
         self.x0 < o.x1 && o.x0 < self.x1 && self.y0 < o.y1 && o.y0 < self.y1
     }
+    /// The `w` x `d` rectangle centred at `c`.
+    fn centred(c: Point2<f64>, w: f64, d: f64) -> Rect {
+        Rect {
+            x0: c.x - w * 0.5,
+            x1: c.x + w * 0.5,
+            y0: c.y - d * 0.5,
+            y1: c.y + d * 0.5,
+        }
+    }
+    /// Whether some side of `self` lies outside `r`.
+    fn sticks_out_of(&self, r: &Rect) -> bool {
+        self.x0 < r.x0 || self.x1 > r.x1 || self.y0 < r.y0 || self.y1 > r.y1
+    }
     fn inflate(&self, m: f64) -> Rect {
         Rect {
             x0: self.x0 - m,
@@ -1256,12 +1269,7 @@ fn candidates(placement: Placement, (w, d): (f64, f64), inner: &Rect) -> Vec<Can
                 let ys = range(inner.y0 + fd * 0.5 + margin, inner.y1 - fd * 0.5 - margin);
                 for &x in &xs {
                     for &y in &ys {
-                        let foot = Rect {
-                            x0: x - fw * 0.5,
-                            x1: x + fw * 0.5,
-                            y0: y - fd * 0.5,
-                            y1: y + fd * 0.5,
-                        };
+                        let foot = Rect::centred(Point2::new(x, y), fw, fd);
                         out.push(Candidate::new(
                             Point2::new(x, y),
                             yaw,
@@ -1295,12 +1303,7 @@ fn candidates(placement: Placement, (w, d): (f64, f64), inner: &Rect) -> Vec<Can
                         ),
                     };
                     let (fw, fd) = if side % 2 == 0 { (w, d) } else { (d, w) };
-                    let foot = Rect {
-                        x0: c.x - fw * 0.5,
-                        x1: c.x + fw * 0.5,
-                        y0: c.y - fd * 0.5,
-                        y1: c.y + fd * 0.5,
-                    };
+                    let foot = Rect::centred(c, fw, fd);
                     let front = WALL_FRONT_CLEARANCE;
                     let clear = match side {
                         0 => Rect {
@@ -1361,17 +1364,8 @@ fn seat_candidates((w, d): (f64, f64), inner: &Rect, room: &RoomFurniture) -> Ve
                 };
                 a += 0.1;
                 let (fw, fd) = if side % 2 == 0 { (w, d) } else { (d, w) };
-                let foot = Rect {
-                    x0: c.x - fw * 0.5,
-                    x1: c.x + fw * 0.5,
-                    y0: c.y - fd * 0.5,
-                    y1: c.y + fd * 0.5,
-                };
-                if foot.x0 < inner.x0
-                    || foot.x1 > inner.x1
-                    || foot.y0 < inner.y0
-                    || foot.y1 > inner.y1
-                {
+                let foot = Rect::centred(c, fw, fd);
+                if foot.sticks_out_of(inner) {
                     continue;
                 }
                 let back = 0.45;
@@ -1394,11 +1388,7 @@ fn seat_candidates((w, d): (f64, f64), inner: &Rect, room: &RoomFurniture) -> Ve
                     },
                 };
                 // the floor behind the seat lies inside the room
-                if clear.x0 < inner.x0
-                    || clear.x1 > inner.x1
-                    || clear.y0 < inner.y0
-                    || clear.y1 > inner.y1
-                {
+                if clear.sticks_out_of(inner) {
                     continue;
                 }
                 out.push(Candidate {
