@@ -10,12 +10,13 @@
 //! * **Clouds**: `/semantic_scan` points (with their `label`) are buffered;
 //!   `/registered_scan` returns and `/terrain_map` cells (re-projected to the
 //!   floor plus their height above ground) are buffered as *unlabelled*
-//!   returns. At `observe_hz` the buffers become one
-//!   [`CloudObservation`]: the labelled points,
-//!   plus the unlabelled returns that fall in no voxel a labelled point of
-//!   this observation occupies, tagged with the unlabelled (ignored) label.
-//!   So the occupancy grid sees every return, and the semantic map's
-//!   evidence in voxels the segmentation labelled is not diluted.
+//!   returns. At `observe_hz` the buffers become at most two observations
+//!   from the same pose: a [`CloudObservation`] of the labelled points
+//!   (semantic map, target gate and occupancy grid) and an
+//!   [`OccupancyObservation`] of the unlabelled returns (occupancy grid
+//!   only). So the grid sees every return, and a 360-degree scan never
+//!   dilutes the label evidence of voxels the segmentation saw, nor counts
+//!   as a detection or a miss of a target candidate.
 //! * **Agent**: [`Agent::step`] runs at `control_hz` (1 Hz); its executor
 //!   computes arrival from the odometry pose (the CMU stack has no "reached"
 //!   signal). Every dispatched mission's waypoint is published on
@@ -31,14 +32,17 @@
 //!   Scout driver's `Twist`, clamped to the configured speed limits, with a
 //!   watchdog that sends one zero twist when commands stop.
 
-use std::collections::{HashSet, VecDeque};
+use std::collections::VecDeque;
 use std::time::Duration;
 
 use nalgebra::{Isometry3, Point3, Translation3};
 use serde::{Deserialize, Serialize};
 use sornav::executor::{Mission, MissionId, RobotPose};
-use sornav::semantic_map::{LabelId, LabeledPoint};
-use sornav::{Agent, AgentCommand, AgentError, AgentStats, CloudObservation, Observation, Sensor};
+use sornav::semantic_map::LabeledPoint;
+use sornav::{
+    Agent, AgentCommand, AgentError, AgentStats, CloudObservation, Observation,
+    OccupancyObservation, Sensor,
+};
 
 use crate::config::{ConfigError, OdometryFrame, ScoutConfig};
 use crate::markers::markers_from_snapshot;
@@ -142,10 +146,8 @@ pub struct BridgeStats {
     pub skipped_points: u64,
     /// Buffered points dropped by the per-observation cap.
     pub dropped_points: u64,
-    /// Unlabelled returns left out because a labelled point shared their
-    /// voxel.
-    pub deduplicated_points: u64,
-    /// Observations given to the agent.
+    /// Observations given to the agent (a labelled cloud and an
+    /// occupancy-only frame count as two).
     pub observations: u64,
     /// Observations the agent refused.
     pub refused_observations: u64,
@@ -244,7 +246,7 @@ pub struct Bridge {
     state: NodeState,
     odom: Option<OdomSample>,
     labelled: VecDeque<Vec<LabeledPoint>>,
-    unlabelled: VecDeque<Vec<Point3<f32>>>,
+    unlabelled: VecDeque<Vec<Point3<f64>>>,
     last_observe: Option<Duration>,
     last_step: Option<Duration>,
     last_waypoint: Option<Duration>,
@@ -272,14 +274,6 @@ fn secs(d: Duration) -> f64 {
 
 fn due(last: Option<Duration>, now: Duration, period_s: f64) -> bool {
     last.is_none_or(|t| now.saturating_sub(t).as_secs_f64() + 1e-9 >= period_s)
-}
-
-fn voxel(p: &Point3<f32>, inv: f64) -> (i64, i64, i64) {
-    (
-        (f64::from(p.x) * inv).floor() as i64,
-        (f64::from(p.y) * inv).floor() as i64,
-        (f64::from(p.z) * inv).floor() as i64,
-    )
 }
 
 impl Bridge {
@@ -547,8 +541,7 @@ impl Bridge {
         self.stats.registered_scans += 1;
         self.stats.skipped_points += skipped as u64;
         let n = points.len();
-        self.unlabelled
-            .push_back(points.iter().map(|p| p.cast::<f32>()).collect());
+        self.unlabelled.push_back(points);
         self.trim_buffers();
         Ok(n)
     }
@@ -580,7 +573,7 @@ impl Bridge {
         let floor = self
             .agent
             .as_ref()
-            .map_or(0.0, |a| a.config().frontier.grid.floor_z) as f32;
+            .map_or(0.0, |a| a.config().frontier.grid.floor_z);
         self.stats.terrain_maps += 1;
         self.stats.skipped_points += decoded.non_finite as u64;
         let n = decoded.points.len();
@@ -588,7 +581,7 @@ impl Bridge {
             decoded
                 .points
                 .into_iter()
-                .map(|(p, h)| Point3::new(p.x, p.y, floor + h))
+                .map(|(p, h)| Point3::new(f64::from(p.x), f64::from(p.y), floor + f64::from(h)))
                 .collect(),
         );
         self.trim_buffers();
@@ -719,36 +712,27 @@ impl Bridge {
         if self.labelled.is_empty() && self.unlabelled.is_empty() {
             return;
         }
-        let inv = 1.0 / agent.config().semantic_map.resolution;
-        let unlabelled_label = LabelId(self.config.inputs.unlabelled_label);
-        let mut points: Vec<LabeledPoint> = self.labelled.drain(..).flatten().collect();
-        let occupied: HashSet<(i64, i64, i64)> =
-            points.iter().map(|p| voxel(&p.position, inv)).collect();
-        let mut dedup = 0u64;
-        for p in self.unlabelled.drain(..).flatten() {
-            if occupied.contains(&voxel(&p, inv)) {
-                dedup += 1;
-            } else {
-                points.push(LabeledPoint::new(p.x, p.y, p.z, unlabelled_label));
-            }
-        }
-        self.stats.deduplicated_points += dedup;
+        let labelled: Vec<LabeledPoint> = self.labelled.drain(..).flatten().collect();
+        let unlabelled: Vec<Point3<f64>> = self.unlabelled.drain(..).flatten().collect();
         self.last_observe = Some(now);
-        if points.is_empty() {
-            return;
-        }
-        let observation = Observation {
-            pose,
-            sensor: Sensor::Cloud(CloudObservation {
-                origin: odom.sensor,
-                points,
-            }),
-        };
-        match agent.observe(&observation) {
-            Ok(_) => self.stats.observations += 1,
-            Err(e) => {
-                self.stats.refused_observations += 1;
-                self.last_error = Some(format!("observation refused: {e}"));
+        let origin = odom.sensor;
+        let frames = [
+            (!labelled.is_empty()).then_some(Sensor::Cloud(CloudObservation {
+                origin,
+                points: labelled,
+            })),
+            (!unlabelled.is_empty()).then_some(Sensor::Occupancy(OccupancyObservation {
+                origin,
+                points: unlabelled,
+            })),
+        ];
+        for sensor in frames.into_iter().flatten() {
+            match agent.observe(&Observation { pose, sensor }) {
+                Ok(_) => self.stats.observations += 1,
+                Err(e) => {
+                    self.stats.refused_observations += 1;
+                    self.last_error = Some(format!("observation refused: {e}"));
+                }
             }
         }
     }

@@ -365,15 +365,18 @@ pub struct InputsConfig {
     pub label_field: String,
     /// Height-above-ground channel of the terrain map.
     pub terrain_height_field: String,
-    /// Feed `/registered_scan` returns the semantic cloud does not cover to
-    /// the occupancy grid.
+    /// Feed `/registered_scan` returns to the occupancy grid (as
+    /// occupancy-only observations).
     pub use_registered_scan: bool,
     /// Feed `/terrain_map` to the occupancy grid (re-projected to the floor
     /// height plus its height above ground, so slopes stay traversable).
     pub use_terrain_map: bool,
-    /// Label given to unlabelled returns (registered scan, terrain map); it
-    /// must be an ignored (structure) label of the agent, and is added as
-    /// `unlabelled` when the agent's label list lacks it.
+    /// Label the upstream segmentation gives semantic-cloud points it could
+    /// not classify; it must be an ignored (structure) label of the agent,
+    /// and is added as `unlabelled` when the agent's label list lacks it, so
+    /// such points never form object clusters. (Registered-scan and
+    /// terrain-map returns carry no label at all: they reach the agent as
+    /// occupancy-only observations.)
     pub unlabelled_label: u16,
     /// Cap on the points of one observation (newest clouds kept).
     pub max_points_per_observation: usize,

@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use nalgebra::Point2;
 use proptest::prelude::*;
 use sornav_platform_scout::bridge::{
     Bridge, BridgeError, NodeState, Outgoing, Status, clamp_twist,
@@ -165,11 +166,11 @@ fn bad_inputs_are_rejected_and_counted() {
 }
 
 #[test]
-fn unlabelled_returns_feed_occupancy_without_diluting_labelled_voxels() {
+fn unlabelled_returns_feed_occupancy_only() {
     let mut b = Bridge::new(config()).unwrap();
     b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
     let labelled = [[1.025, 0.025, 0.425, 15.0]];
-    // One unlabelled return in the same voxel, one elsewhere.
+    // One unlabelled return in the labelled point's voxel, one elsewhere.
     let unlabelled = [[1.03, 0.03, 0.43, 0.0], [2.025, 1.025, 0.425, 0.0]];
     b.on_semantic_scan(&semantic(&labelled), ms(0)).unwrap();
     b.on_registered_scan(&xyzi(&unlabelled, "map"), ms(0))
@@ -179,14 +180,28 @@ fn unlabelled_returns_feed_occupancy_without_diluting_labelled_voxels() {
         .unwrap();
     b.tick(ms(0));
     let s = b.status(ms(0));
-    assert_eq!(s.bridge.deduplicated_points, 1);
-    assert_eq!(s.bridge.observations, 1);
-    assert_eq!(s.agent.unwrap().observations, 1);
+    // A labelled cloud and an occupancy-only frame from the same pose.
+    assert_eq!(s.bridge.observations, 2);
+    let stats = s.agent.unwrap();
+    assert_eq!((stats.observations, stats.occupancy_observations), (2, 1));
     let a = b.agent().unwrap();
-    // The labelled voxel kept a single label; the other two returns are
-    // unlabelled (ignored) evidence at z = floor + height.
+    // The semantic map holds the labelled point only, with one hit: the
+    // unlabelled return in its voxel did not dilute it.
     let m = a.semantic_map();
     assert_eq!(m.integrations(), 1);
+    assert_eq!(m.voxel_count(), 1);
+    let (_, evidence) = m.voxels().next().unwrap();
+    assert_eq!(evidence.hits(), 1);
+    // Every return reached the occupancy grid, the terrain cell at its
+    // height above the floor (in the obstacle band).
+    let grid = a.frontier_map().grid();
+    for (x, y) in [(1.025, 0.025), (2.025, 1.025), (3.025, 0.025)] {
+        let cell = grid.cell_of(&Point2::new(x, y)).unwrap();
+        assert!(
+            grid.log_odds(cell) > 0.0,
+            "({x}, {y}) has no obstacle evidence"
+        );
+    }
     // Disabled inputs are ignored.
     let mut c = config();
     c.inputs.use_registered_scan = false;

@@ -394,6 +394,11 @@ impl Agent {
     /// Integrates one observation into both maps and updates the target
     /// gate with the clusters this frame detected.
     ///
+    /// A [`Sensor::Occupancy`] frame (unlabelled LiDAR returns, a terrain
+    /// map) updates the occupancy grid and frontiers only: the semantic map
+    /// and the target gate are left alone (it is neither a detection nor a
+    /// miss of any candidate), and it does not count as a semantic frame.
+    ///
     /// # Errors
     /// [`AgentError::Observation`] for a non-finite pose, bad intrinsics,
     /// mismatched buffers or an empty frame, and the maps' errors (for
@@ -427,7 +432,7 @@ impl Agent {
             }
         };
         let stats = match &observation.sensor {
-            Sensor::Depth(d) => self.semantic.integrate_depth(
+            Sensor::Depth(d) => Some(self.semantic.integrate_depth(
                 &DepthFrame {
                     camera: &d.camera,
                     pose: &d.camera_pose,
@@ -435,25 +440,33 @@ impl Agent {
                     labels: &d.labels,
                 },
                 &self.config.depth,
-            )?,
-            Sensor::Cloud(c) => self.semantic.integrate_points(&c.origin, &c.points)?,
+            )?),
+            Sensor::Cloud(c) => Some(self.semantic.integrate_points(&c.origin, &c.points)?),
+            Sensor::Occupancy(_) => None,
         };
-        let clusters = self.semantic.update_clusters();
         self.pose = Some(observation.pose);
         self.stats.observations += 1;
-        self.stats.rejected_points += stats.rejected() + occupancy_rejected;
         let mut report = ObservationReport {
-            points: stats.points,
-            semantic_accepted: stats.accepted,
-            semantic_rejected: stats.rejected(),
             occupancy_points: sensor_points,
             footprint_points: points.len() as u64 - sensor_points,
             occupancy_rejected,
             objects: self.semantic.cluster_count(),
-            target_detections: 0,
             frontiers_added: update.frontiers_added,
             frontiers_removed: update.frontiers_removed,
+            ..ObservationReport::default()
         };
+        let Some(stats) = stats else {
+            self.stats.occupancy_observations += 1;
+            self.stats.rejected_points += occupancy_rejected;
+            report.points = sensor_points + occupancy_rejected;
+            return Ok(report);
+        };
+        let clusters = self.semantic.update_clusters();
+        self.stats.rejected_points += stats.rejected() + occupancy_rejected;
+        report.points = stats.points;
+        report.semantic_accepted = stats.accepted;
+        report.semantic_rejected = stats.rejected();
+        report.objects = self.semantic.cluster_count();
         if let Some(state) = self.target.as_mut() {
             let pairs: Vec<(ObjectId, ObjectId)> = clusters
                 .retired

@@ -117,7 +117,8 @@ pub use config::{
 };
 pub use error::{AgentError, ConfigError, ObservationError};
 pub use observation::{
-    CloudObservation, DepthObservation, Observation, ObservationReport, Sensor, occupancy_stride,
+    CloudObservation, DepthObservation, Observation, ObservationReport, OccupancyObservation,
+    Sensor, occupancy_stride,
 };
 pub use ordering::Route;
 pub use snapshot::{

@@ -32,6 +32,18 @@ pub struct CloudObservation {
     pub points: Vec<LabeledPoint>,
 }
 
+/// Unlabelled world-frame returns for the occupancy grid only (a LiDAR
+/// scan, a terrain map): they carve free space and mark obstacles but never
+/// touch the semantic map or the target gate, so a 360-degree scan cannot
+/// dilute the label evidence of voxels the segmentation saw.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct OccupancyObservation {
+    /// Sensor origin (world frame) the rays start from.
+    pub origin: Point3<f64>,
+    /// World-frame returns.
+    pub points: Vec<Point3<f64>>,
+}
+
 /// The sensor part of an [`Observation`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub enum Sensor {
@@ -39,6 +51,8 @@ pub enum Sensor {
     Depth(DepthObservation),
     /// A labelled world-frame cloud.
     Cloud(CloudObservation),
+    /// Unlabelled returns for the occupancy grid only.
+    Occupancy(OccupancyObservation),
 }
 
 /// One observation: the robot's base pose (on the floor, yaw about z) and
@@ -124,6 +138,14 @@ impl Observation {
                     return Err(ObservationError::Empty);
                 }
             }
+            Sensor::Occupancy(o) => {
+                if !finite3(&o.origin) {
+                    return Err(ObservationError::NonFiniteSensorPose);
+                }
+                if o.points.is_empty() {
+                    return Err(ObservationError::Empty);
+                }
+            }
         }
         Ok(())
     }
@@ -133,7 +155,14 @@ impl Observation {
         match &self.sensor {
             Sensor::Depth(d) => Point3::from(d.camera_pose.translation.vector),
             Sensor::Cloud(c) => c.origin,
+            Sensor::Occupancy(o) => o.origin,
         }
+    }
+
+    /// Whether the frame carries semantic labels (depth or labelled cloud);
+    /// an [`OccupancyObservation`] does not.
+    pub fn is_semantic(&self) -> bool {
+        !matches!(self.sensor, Sensor::Occupancy(_))
     }
 
     /// The frame's returns as world points for the occupancy grid, and the
@@ -144,7 +173,7 @@ impl Observation {
     /// limit; see [`occupancy_stride`]); a depth below `min_depth`, zero,
     /// NaN or infinite is left out (no information); a depth beyond
     /// `max_depth` is kept (the grid only carves free space along returns
-    /// beyond its range). Non-finite cloud points are left out.
+    /// beyond its range). Non-finite cloud and occupancy points are left out.
     ///
     /// # Complexity
     /// O(pixels / stride^2) or O(points).
@@ -182,6 +211,17 @@ impl Observation {
                     );
                     if finite3(&q) {
                         out.push(q);
+                    } else {
+                        rejected += 1;
+                    }
+                }
+                out
+            }
+            Sensor::Occupancy(o) => {
+                let mut out = Vec::with_capacity(o.points.len());
+                for q in &o.points {
+                    if finite3(q) {
+                        out.push(*q);
                     } else {
                         rejected += 1;
                     }

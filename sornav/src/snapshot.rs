@@ -137,8 +137,11 @@ pub struct ObjectRecord {
 /// Counters of one agent.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
 pub struct AgentStats {
-    /// Observations integrated.
+    /// Observations integrated (all kinds).
     pub observations: u64,
+    /// Of those, occupancy-only observations ([`Sensor::Occupancy`](crate::Sensor::Occupancy)).
+    #[serde(default)]
+    pub occupancy_observations: u64,
     /// Observations refused.
     pub refused_observations: u64,
     /// Steps taken.

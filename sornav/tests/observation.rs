@@ -6,12 +6,13 @@ mod common;
 
 use std::time::Duration;
 
-use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion};
+use nalgebra::{Isometry3, Point2, Point3, Translation3, UnitQuaternion};
+use proptest::prelude::*;
 use sornav::executor::{MissionId, MissionStatus, RobotPose};
 use sornav::semantic_map::{LabelId, LabeledPoint, PinholeCamera, optical_pose};
 use sornav::{
     Agent, AgentCommand, AgentConfig, AgentError, CloudObservation, DepthObservation, Observation,
-    ObservationError, Sensor,
+    ObservationError, OccupancyObservation, Sensor,
 };
 
 fn pose() -> RobotPose {
@@ -280,5 +281,158 @@ fn protocol_errors_are_typed() {
     let next = agent.step(Duration::from_secs(11)).unwrap();
     if let AgentCommand::Dispatch { mission: m2, .. } = next {
         assert_ne!(m2.kind, mission.kind, "the failed frontier is not retried");
+    }
+}
+
+/// The positions of labelled points, labels dropped.
+fn positions(points: &[LabeledPoint]) -> Vec<Point3<f64>> {
+    points
+        .iter()
+        .map(|p| {
+            Point3::new(
+                f64::from(p.position.x),
+                f64::from(p.position.y),
+                f64::from(p.position.z),
+            )
+        })
+        .collect()
+}
+
+/// The labelled scan of `world` at `xy` as unlabelled world points.
+fn unlabelled(world: &common::World, xy: Point2<f64>) -> Vec<Point3<f64>> {
+    positions(&world.scan(xy))
+}
+
+fn occupancy_observation(points: Vec<Point3<f64>>) -> Observation {
+    Observation {
+        pose: pose(),
+        sensor: Sensor::Occupancy(OccupancyObservation {
+            origin: Point3::new(0.0, 0.0, 0.88),
+            points,
+        }),
+    }
+}
+
+#[test]
+fn occupancy_frames_build_the_grid_but_never_touch_semantics_or_the_gate() {
+    let world = common::World {
+        blocks: vec![
+            common::wall(3.0, -2.0, 3.2, 2.0),
+            common::object(15, 2.5, -0.3, 2.9, 0.3, 0.4, 1.0),
+        ],
+    };
+    let xy = Point2::new(0.0, 0.0);
+    let mut agent = agent();
+    let report = agent
+        .observe(&occupancy_observation(unlabelled(&world, xy)))
+        .unwrap();
+    assert!(report.occupancy_points > 0);
+    assert_eq!(report.points, report.occupancy_points);
+    assert_eq!((report.semantic_accepted, report.semantic_rejected), (0, 0));
+    assert_eq!((report.objects, report.target_detections), (0, 0));
+    assert!(report.frontiers_added > 0);
+    assert_eq!(agent.semantic_map().integrations(), 0);
+    assert_eq!(agent.semantic_map().cluster_count(), 0);
+    assert_eq!(agent.stats().occupancy_observations, 1);
+    assert_eq!(agent.stats().observations, 1);
+    // The pose is known now, so the agent can explore.
+    assert!(matches!(
+        agent.step(Duration::ZERO).unwrap(),
+        AgentCommand::Dispatch { .. }
+    ));
+
+    // Two labelled frames see the TV: s = 2. Occupancy frames in between
+    // add neither support nor misses (the gate's update counter stays).
+    let labelled = world.observation(pose());
+    for _ in 0..2 {
+        agent.observe(&labelled).unwrap();
+        let updates = agent.gate().unwrap().tracker().updates();
+        for _ in 0..4 {
+            agent
+                .observe(&occupancy_observation(unlabelled(&world, xy)))
+                .unwrap();
+        }
+        assert_eq!(agent.gate().unwrap().tracker().updates(), updates);
+    }
+    let track = agent
+        .gate()
+        .unwrap()
+        .tracker()
+        .tracks()
+        .next()
+        .unwrap()
+        .clone();
+    assert_eq!((track.evidence.support, track.evidence.misses), (2, 0));
+    assert_eq!(agent.semantic_map().integrations(), 2);
+    assert_eq!(agent.stats().occupancy_observations, 9);
+}
+
+#[test]
+fn occupancy_frames_are_validated() {
+    let mut agent = agent();
+    assert!(matches!(
+        agent.observe(&occupancy_observation(Vec::new())),
+        Err(AgentError::Observation(ObservationError::Empty))
+    ));
+    let mut bad_origin = occupancy_observation(vec![Point3::new(1.0, 0.0, 0.5)]);
+    if let Sensor::Occupancy(o) = &mut bad_origin.sensor {
+        o.origin.y = f64::NAN;
+    }
+    assert!(matches!(
+        agent.observe(&bad_origin),
+        Err(AgentError::Observation(
+            ObservationError::NonFiniteSensorPose
+        ))
+    ));
+    assert_eq!(agent.stats().refused_observations, 2);
+    let report = agent
+        .observe(&occupancy_observation(vec![
+            Point3::new(2.0, 0.0, 0.5),
+            Point3::new(f64::NAN, 0.0, 0.5),
+            Point3::new(2.0, f64::NEG_INFINITY, 0.5),
+        ]))
+        .unwrap();
+    assert_eq!((report.points, report.occupancy_points), (3, 1));
+    assert_eq!(report.occupancy_rejected, 2);
+    assert_eq!(agent.stats().rejected_points, 2);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// Differential: an occupancy frame leaves exactly the occupancy grid
+    /// and frontiers a labelled cloud of the same points leaves.
+    #[test]
+    fn occupancy_frames_equal_clouds_for_the_grid(
+        raw in proptest::collection::vec((-6.0f64..6.0, -6.0f64..6.0, -0.2f64..2.2, 0u16..20), 1..300),
+        origin in (-1.0f64..1.0, -1.0f64..1.0),
+    ) {
+        let origin = Point3::new(origin.0, origin.1, 0.88);
+        let points: Vec<LabeledPoint> = raw
+            .iter()
+            .map(|&(x, y, z, l)| LabeledPoint::new(x as f32, y as f32, z as f32, LabelId(l)))
+            .collect();
+        let occupancy = Observation {
+            pose: pose(),
+            sensor: Sensor::Occupancy(OccupancyObservation {
+                origin,
+                points: positions(&points),
+            }),
+        };
+        let cloud = Observation {
+            pose: pose(),
+            sensor: Sensor::Cloud(CloudObservation { origin, points }),
+        };
+        let (mut a, mut b) = (agent(), agent());
+        let ra = a.observe(&cloud).unwrap();
+        let rb = b.observe(&occupancy).unwrap();
+        prop_assert_eq!(ra.occupancy_points, rb.occupancy_points);
+        prop_assert_eq!(ra.footprint_points, rb.footprint_points);
+        prop_assert_eq!((ra.frontiers_added, ra.frontiers_removed), (rb.frontiers_added, rb.frontiers_removed));
+        let (sa, sb) = (a.snapshot(), b.snapshot());
+        prop_assert_eq!(&sa.occupancy, &sb.occupancy);
+        prop_assert_eq!(&sa.frontiers, &sb.frontiers);
+        prop_assert_eq!(b.semantic_map().integrations(), 0);
+        prop_assert!(sb.objects.is_empty());
     }
 }
