@@ -116,6 +116,25 @@ impl Default for DepthOptions {
     }
 }
 
+impl DepthOptions {
+    /// Checks `stride >= 1` and a finite window `0 <= min_depth < max_depth`.
+    ///
+    /// # Errors
+    /// [`MapError::InvalidConfig`] naming the first bad field.
+    pub fn validate(&self) -> Result<(), MapError> {
+        if self.stride == 0 {
+            return Err(MapError::InvalidConfig("depth stride must be >= 1".into()));
+        }
+        let (dmin, dmax) = (self.min_depth, self.max_depth);
+        if !(dmin.is_finite() && dmax.is_finite() && dmin >= 0.0 && dmax > dmin) {
+            return Err(MapError::InvalidConfig(
+                "depth window must satisfy 0 <= min_depth < max_depth (finite)".into(),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// One labelled depth image: row-major z-depth (metres; 0, NaN or
 /// infinity mark missing returns) and a label per pixel.
 #[derive(Debug, Clone, Copy)]
@@ -173,15 +192,8 @@ impl SemanticMap {
         if !finite_pose {
             return Err(MapError::NonFinitePose);
         }
-        if options.stride == 0 {
-            return Err(MapError::InvalidConfig("depth stride must be >= 1".into()));
-        }
+        options.validate()?;
         let (dmin, dmax) = (options.min_depth, options.max_depth);
-        if !(dmin.is_finite() && dmax.is_finite() && dmin >= 0.0 && dmax > dmin) {
-            return Err(MapError::InvalidConfig(
-                "depth window must satisfy 0 <= min_depth < max_depth (finite)".into(),
-            ));
-        }
         let rot = pose.rotation.to_rotation_matrix();
         let t = pose.translation.vector;
         let stride = options.stride as usize;

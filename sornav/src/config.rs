@@ -399,17 +399,7 @@ impl AgentConfig {
         self.semantic_map
             .validate()
             .map_err(|e| component("semantic_map", e))?;
-        let d = &self.depth;
-        if !(d.min_depth.is_finite() && d.max_depth.is_finite())
-            || d.min_depth < 0.0
-            || d.max_depth <= d.min_depth
-            || d.stride == 0
-        {
-            return Err(component(
-                "depth",
-                "need finite 0 <= min_depth < max_depth and stride >= 1",
-            ));
-        }
+        self.depth.validate().map_err(|e| component("depth", e))?;
         self.frontier
             .validate()
             .map_err(|e| component("frontier", e))?;
@@ -425,14 +415,9 @@ impl AgentConfig {
             .solver
             .validate()
             .map_err(|e| component("horizon", e))?;
-        if !(self.supervisor.interval_s.is_finite() && self.supervisor.interval_s >= 0.0)
-            || self.supervisor.top_k == 0
-        {
-            return Err(component(
-                "supervisor",
-                "interval_s must be finite and >= 0, top_k >= 1",
-            ));
-        }
+        self.supervisor
+            .validate()
+            .map_err(|e| component("supervisor", e))?;
         match &self.policy {
             PolicyConfig::Commonsense(c) => {
                 c.validate().map_err(|e| component("policy", e))?;

@@ -103,6 +103,28 @@ fn unknown_fields_and_bad_values_are_errors() {
             ..
         })
     ));
+    // Every supervisor and depth-window field is checked here, not first
+    // when the agent is built.
+    for (component, doc) in [
+        ("supervisor", "[supervisor]\nregion_dwell_s = -1.0\n"),
+        ("supervisor", "[supervisor]\ninterval_s = -0.5\n"),
+        ("depth", "[depth]\nstride = 0\n"),
+        ("depth", "[depth]\nmin_depth = 3.0\nmax_depth = 2.0\n"),
+    ] {
+        match AgentConfig::from_toml(doc) {
+            Err(ConfigError::Component { component: c, .. }) => assert_eq!(c, component, "{doc}"),
+            other => panic!("{doc}: expected a {component} error, got {other:?}"),
+        }
+    }
+    let mut dwell = AgentConfig::default();
+    dwell.supervisor.region_dwell_s = f64::NAN;
+    assert!(matches!(
+        dwell.validate(),
+        Err(ConfigError::Component {
+            component: "supervisor",
+            ..
+        })
+    ));
     let nan = "[gate]\nn_obs = 0\n";
     assert!(AgentConfig::from_toml(nan).is_err());
     let dup = "[[labels]]\nid = 1\nname = \"wall\"\n[[labels]]\nid = 1\nname = \"floor\"\n";

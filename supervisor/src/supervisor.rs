@@ -51,6 +51,23 @@ pub struct SupervisorConfig {
     pub region_dwell_s: f64,
 }
 
+impl SupervisorConfig {
+    /// Checks a finite `interval_s >= 0`, `top_k >= 1` and a finite
+    /// `region_dwell_s >= 0`.
+    ///
+    /// # Errors
+    /// [`SupervisorError::InvalidConfig`] with the configuration.
+    pub fn validate(&self) -> Result<(), SupervisorError> {
+        if !(self.interval_s.is_finite() && self.interval_s >= 0.0)
+            || self.top_k == 0
+            || !(self.region_dwell_s.is_finite() && self.region_dwell_s >= 0.0)
+        {
+            return Err(SupervisorError::InvalidConfig(format!("{self:?}")));
+        }
+        Ok(())
+    }
+}
+
 impl Default for SupervisorConfig {
     fn default() -> Self {
         Self {
@@ -212,15 +229,10 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
     /// A supervisor with a policy.
     ///
     /// # Errors
-    /// [`SupervisorError::InvalidConfig`] for a negative or non-finite
-    /// interval or `top_k == 0`.
+    /// [`SupervisorError::InvalidConfig`] when `config` fails
+    /// [`SupervisorConfig::validate`].
     pub fn new(policy: P, config: SupervisorConfig) -> Result<Self, SupervisorError> {
-        if !(config.interval_s.is_finite() && config.interval_s >= 0.0)
-            || config.top_k == 0
-            || !(config.region_dwell_s.is_finite() && config.region_dwell_s >= 0.0)
-        {
-            return Err(SupervisorError::InvalidConfig(format!("{config:?}")));
-        }
+        config.validate()?;
         Ok(Self {
             policy,
             config,
