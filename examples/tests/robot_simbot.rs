@@ -20,8 +20,9 @@ use sornav_platform_scout::bridge::{ConfirmedTarget, NodeState, Status};
 use sornav_platform_scout::config::ScoutConfig;
 use sornav_platform_scout::contract::Qos;
 use sornav_platform_scout::msg::{Int8, RosString};
-use sornav_platform_scout::{netns, node};
+use sornav_platform_scout::node;
 use sornav_platform_sim::{ProceduralConfig, Scene};
+use sornav_test_support::netns;
 
 /// A private ROS domain id.
 const DOMAIN: u16 = 172;

@@ -40,7 +40,7 @@ use serde::{Deserialize, Serialize};
 use sornav::executor::{Mission, MissionId, RobotPose};
 use sornav::semantic_map::LabeledPoint;
 use sornav::{
-    Agent, AgentCommand, AgentError, AgentStats, CloudObservation, Observation,
+    Agent, AgentCommand, AgentError, AgentStats, CloudObservation, DecisionStep, Observation,
     OccupancyObservation, Sensor,
 };
 
@@ -175,8 +175,9 @@ pub struct MissionStatus {
 pub struct DecisionStatus {
     /// Clock reading (s since the node started).
     pub at_s: f64,
-    /// The rule that decided (`policy_evaluated`, `target_confirmed`, ...).
-    pub step: String,
+    /// The rule that decided (serialised `policy_evaluated`,
+    /// `target_confirmed`, ...).
+    pub step: DecisionStep,
     /// What was done (`explore`, `relocate`, `stop`, ...).
     pub action: String,
     /// Why.
@@ -251,8 +252,8 @@ pub struct Bridge {
     last_step: Option<Duration>,
     last_waypoint: Option<Duration>,
     last_markers: Option<Duration>,
+    /// The last relayed command, until the watchdog has sent its zero twist.
     last_cmd_vel: Option<Duration>,
-    watchdog_sent: bool,
     holding: bool,
     confirmed: Vec<ConfirmedTarget>,
     stats: BridgeStats,
@@ -297,7 +298,6 @@ impl Bridge {
             last_waypoint: None,
             last_markers: None,
             last_cmd_vel: None,
-            watchdog_sent: true,
             holding: false,
             confirmed: Vec::new(),
             stats: BridgeStats::default(),
@@ -434,13 +434,19 @@ impl Bridge {
                 let _ = self.apply_target(&request, now);
             }
         } else if self.state == NodeState::WaitingForOdometry {
-            self.state = if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
-                NodeState::Searching
-            } else {
-                NodeState::Idle
-            };
+            self.state = self.resumed_state();
         }
         Ok(())
+    }
+
+    /// The state once odometry is fresh again: searching when the agent has
+    /// a target, idle otherwise.
+    fn resumed_state(&self) -> NodeState {
+        if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
+            NodeState::Searching
+        } else {
+            NodeState::Idle
+        }
     }
 
     fn base_pose(&self) -> Option<RobotPose> {
@@ -458,18 +464,18 @@ impl Bridge {
 
     fn trim_buffers(&mut self) {
         let cap = self.config.inputs.max_points_per_observation;
-        let total = |s: &Self| {
-            s.labelled.iter().map(Vec::len).sum::<usize>()
-                + s.unlabelled.iter().map(Vec::len).sum::<usize>()
-        };
-        while total(self) > cap {
+        let mut l: usize = self.labelled.iter().map(Vec::len).sum();
+        let mut u: usize = self.unlabelled.iter().map(Vec::len).sum();
+        while l + u > cap {
             // Drop the oldest cloud of the larger buffer.
-            let l: usize = self.labelled.iter().map(Vec::len).sum();
-            let u: usize = self.unlabelled.iter().map(Vec::len).sum();
             let dropped = if l >= u {
-                self.labelled.pop_front().map_or(0, |c| c.len())
+                let n = self.labelled.pop_front().map_or(0, |c| c.len());
+                l -= n;
+                n
             } else {
-                self.unlabelled.pop_front().map_or(0, |c| c.len())
+                let n = self.unlabelled.pop_front().map_or(0, |c| c.len());
+                u -= n;
+                n
             };
             if dropped == 0 {
                 break;
@@ -478,16 +484,22 @@ impl Bridge {
         }
     }
 
-    fn cloud_view<'a>(
+    /// Checks the frame of the cloud on `topic` and that odometry arrived,
+    /// then validates its layout and decodes it with `decode`; every error
+    /// is rejected (counted) with the topic.
+    fn decode_cloud<T>(
         &mut self,
         topic: &'static str,
-        msg: &'a PointCloud2,
-    ) -> Result<CloudView<'a>, BridgeError> {
+        msg: &PointCloud2,
+        decode: impl FnOnce(&CloudView<'_>) -> Result<T, CloudError>,
+    ) -> Result<T, BridgeError> {
         self.check_frame(topic, &msg.header)?;
         if self.odom.is_none() {
             return Err(self.reject(BridgeError::NoOdometry(topic)));
         }
-        CloudView::new(msg).map_err(|source| self.reject(BridgeError::Cloud { topic, source }))
+        CloudView::new(msg)
+            .and_then(|view| decode(&view))
+            .map_err(|source| self.reject(BridgeError::Cloud { topic, source }))
     }
 
     /// `/semantic_scan`: points with a `label` channel. Returns the number
@@ -501,14 +513,9 @@ impl Bridge {
         msg: &PointCloud2,
         _now: Duration,
     ) -> Result<usize, BridgeError> {
-        let view = self.cloud_view("semantic_scan", msg)?;
         let field = self.config.inputs.label_field.clone();
-        let decoded = view.labelled_points(&field).map_err(|source| {
-            self.reject(BridgeError::Cloud {
-                topic: "semantic_scan",
-                source,
-            })
-        })?;
+        let decoded =
+            self.decode_cloud("semantic_scan", msg, |view| view.labelled_points(&field))?;
         self.stats.semantic_clouds += 1;
         self.stats.skipped_points += (decoded.non_finite + decoded.bad_label) as u64;
         let n = decoded.points.len();
@@ -531,13 +538,7 @@ impl Bridge {
         if !self.config.inputs.use_registered_scan {
             return Ok(0);
         }
-        let view = self.cloud_view("registered_scan", msg)?;
-        let (points, skipped) = view.xyz().map_err(|source| {
-            self.reject(BridgeError::Cloud {
-                topic: "registered_scan",
-                source,
-            })
-        })?;
+        let (points, skipped) = self.decode_cloud("registered_scan", msg, |view| view.xyz())?;
         self.stats.registered_scans += 1;
         self.stats.skipped_points += skipped as u64;
         let n = points.len();
@@ -562,14 +563,8 @@ impl Bridge {
         if !self.config.inputs.use_terrain_map {
             return Ok(0);
         }
-        let view = self.cloud_view("terrain_map", msg)?;
         let field = self.config.inputs.terrain_height_field.clone();
-        let decoded = view.points_with(&field).map_err(|source| {
-            self.reject(BridgeError::Cloud {
-                topic: "terrain_map",
-                source,
-            })
-        })?;
+        let decoded = self.decode_cloud("terrain_map", msg, |view| view.points_with(&field))?;
         let floor = self
             .agent
             .as_ref()
@@ -608,11 +603,8 @@ impl Bridge {
             return Ok(vec![self.status_message(now)]);
         }
         self.apply_target(&request, now)?;
-        Ok(vec![
-            Outgoing::Joy(Self::autonomy_joy()),
-            Outgoing::Stop(Int8 { data: 0 }),
-            self.status_message(now),
-        ])
+        // Autonomy mode and the `/stop` release again, as at start.
+        Ok(self.start(now))
     }
 
     fn apply_target(&mut self, request: &str, now: Duration) -> Result<(), BridgeError> {
@@ -645,7 +637,6 @@ impl Bridge {
             return None;
         }
         self.last_cmd_vel = Some(now);
-        self.watchdog_sent = false;
         self.stats.relayed += 1;
         Some(Outgoing::CmdVel(clamp_twist(
             &msg.twist,
@@ -654,25 +645,27 @@ impl Bridge {
         )))
     }
 
+    /// A `/way_point` message at `p` (map frame), counted as published.
+    fn waypoint_msg(&mut self, p: Point3<f64>) -> PointStamped {
+        self.stats.waypoints_published += 1;
+        PointStamped {
+            header: self.header(),
+            point: Point::from(p),
+        }
+    }
+
     /// A waypoint at the robot's own position (the CMU planner stops there).
     fn hold_waypoint(&mut self) -> Option<Outgoing> {
         let pose = self.base_pose()?;
-        self.stats.waypoints_published += 1;
-        Some(Outgoing::WayPoint(PointStamped {
-            header: self.header(),
-            point: Point::from(pose.position),
-        }))
+        Some(Outgoing::WayPoint(self.waypoint_msg(pose.position)))
     }
 
     fn mission_messages(&mut self, mission: &Mission, now: Duration) -> Vec<Outgoing> {
-        self.stats.waypoints_published += 1;
+        let waypoint = self.waypoint_msg(mission.waypoint);
         self.last_waypoint = Some(now);
         self.holding = false;
-        let header = self.header();
-        let mut out = vec![Outgoing::WayPoint(PointStamped {
-            header: header.clone(),
-            point: Point::from(mission.waypoint),
-        })];
+        let header = waypoint.header.clone();
+        let mut out = vec![Outgoing::WayPoint(waypoint)];
         let poses = mission
             .path
             .as_deref()
@@ -747,12 +740,11 @@ impl Bridge {
             return out;
         }
         if self.config.relay.enabled
-            && !self.watchdog_sent
             && self
                 .last_cmd_vel
                 .is_some_and(|t| now.saturating_sub(t).as_secs_f64() > self.config.relay.watchdog_s)
         {
-            self.watchdog_sent = true;
+            self.last_cmd_vel = None;
             out.push(Outgoing::CmdVel(Twist::default()));
         }
         let fresh = self.odometry_fresh(now);
@@ -773,11 +765,7 @@ impl Bridge {
             return out;
         }
         if self.state == NodeState::WaitingForOdometry && self.agent.is_some() {
-            self.state = if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
-                NodeState::Searching
-            } else {
-                NodeState::Idle
-            };
+            self.state = self.resumed_state();
         }
         if due(self.last_observe, now, 1.0 / self.config.rates.observe_hz) {
             self.observe(now);
@@ -794,19 +782,16 @@ impl Bridge {
                 now,
                 self.config.rates.waypoint_republish_s,
             )
-            && let Some(mission) = self
+            && let Some(waypoint) = self
                 .agent
                 .as_ref()
                 .and_then(|a| a.active_mission())
-                .map(|(_, m)| m.clone())
+                .map(|(_, m)| m.waypoint)
         {
             // Re-publish: the planner may have started late or dropped it.
-            self.stats.waypoints_published += 1;
+            let msg = self.waypoint_msg(waypoint);
             self.last_waypoint = Some(now);
-            out.push(Outgoing::WayPoint(PointStamped {
-                header: self.header(),
-                point: Point::from(mission.waypoint),
-            }));
+            out.push(Outgoing::WayPoint(msg));
         }
         if due(self.last_markers, now, self.config.rates.markers_period_s)
             && let Some(agent) = self.agent.as_ref()
@@ -886,10 +871,7 @@ impl Bridge {
                 .and_then(|a| a.decisions().last())
                 .map(|d| DecisionStatus {
                     at_s: d.at.as_secs_f64(),
-                    step: serde_json::to_value(d.step)
-                        .ok()
-                        .and_then(|v| v.as_str().map(str::to_owned))
-                        .unwrap_or_default(),
+                    step: d.step,
                     action: d.action.clone(),
                     reason: d.reason.clone(),
                 }),

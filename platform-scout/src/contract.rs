@@ -179,6 +179,16 @@ impl Topics {
         ]
     }
 
+    /// The QoS of the node's endpoint for `role` (a [`TopicSpec::role`] of
+    /// [`specs`](Self::specs), e.g. `"odometry"`), `None` for a role the
+    /// contract does not have.
+    pub fn qos(&self, role: &str) -> Option<Qos> {
+        self.specs()
+            .into_iter()
+            .find(|s| s.role == role)
+            .map(|s| s.qos)
+    }
+
     /// Checks that every name is an absolute ROS name (`/a/b_c`) and that no
     /// name is used twice (two roles on one topic would need one type).
     ///

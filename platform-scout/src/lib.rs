@@ -30,8 +30,8 @@
 //!   observations, `/way_point`, `/joy`, status, markers, relay, shutdown);
 //!   [`markers`] draws the agent's state for RViz.
 //! * **DDS** ([`node`]): loopback-restricted participants, typed endpoints,
-//!   and [`node::RobotNode`]; [`netns`] runs DDS tests inside a private
-//!   network namespace.
+//!   and [`node::RobotNode`]. The DDS tests run inside a private network
+//!   namespace (`sornav_test_support::netns`).
 //!
 //! # Example
 //! Decoding a `/registered_scan` in PCL's padded `PointXYZI` layout
@@ -80,6 +80,5 @@ pub mod config;
 pub mod contract;
 pub mod markers;
 pub mod msg;
-pub mod netns;
 pub mod node;
 pub mod pointcloud;

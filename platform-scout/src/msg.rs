@@ -117,11 +117,6 @@ impl Time {
             nanosec: d.subsec_nanos(),
         }
     }
-
-    /// Seconds as `f64`.
-    pub fn as_secs_f64(&self) -> f64 {
-        f64::from(self.sec) + f64::from(self.nanosec) * 1e-9
-    }
 }
 
 ros_message!(Time, "builtin_interfaces", "Time");

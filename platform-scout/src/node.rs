@@ -220,23 +220,28 @@ impl RobotNode {
         let mut node = ros_node(&context, &c.ros.namespace, &c.ros.node_name)?;
         let t = &c.topics;
         let relay = c.relay.enabled;
+        // The QoS of each endpoint comes from the contract.
+        let qos = |role: &str| {
+            t.qos(role)
+                .ok_or_else(|| NodeError::Dds(format!("the topic contract has no role `{role}`")))
+        };
         Ok(Self {
-            odometry: subscription(&mut node, &t.state_estimation, Qos::SENSOR)?,
-            registered: subscription(&mut node, &t.registered_scan, Qos::SENSOR)?,
-            terrain: subscription(&mut node, &t.terrain_map, Qos::SENSOR)?,
-            semantic: subscription(&mut node, &t.semantic_scan, Qos::SENSOR)?,
-            target: subscription(&mut node, &t.target, Qos::COMMAND)?,
+            odometry: subscription(&mut node, &t.state_estimation, qos("odometry")?)?,
+            registered: subscription(&mut node, &t.registered_scan, qos("occupancy")?)?,
+            terrain: subscription(&mut node, &t.terrain_map, qos("traversability")?)?,
+            semantic: subscription(&mut node, &t.semantic_scan, qos("semantics")?)?,
+            target: subscription(&mut node, &t.target, qos("target")?)?,
             cmd_vel_in: relay
-                .then(|| subscription(&mut node, &t.cmd_vel_in, Qos::SENSOR))
+                .then(|| subscription(&mut node, &t.cmd_vel_in, qos("cmd_vel_in")?))
                 .transpose()?,
-            way_point: publisher(&mut node, &t.way_point, Qos::COMMAND)?,
-            joy: publisher(&mut node, &t.joy, Qos::COMMAND)?,
-            stop: publisher(&mut node, &t.stop, Qos::COMMAND)?,
-            status: publisher(&mut node, &t.status, Qos::COMMAND)?,
-            markers: publisher(&mut node, &t.markers, Qos::COMMAND)?,
-            path: publisher(&mut node, &t.path, Qos::COMMAND)?,
+            way_point: publisher(&mut node, &t.way_point, qos("way_point")?)?,
+            joy: publisher(&mut node, &t.joy, qos("joy")?)?,
+            stop: publisher(&mut node, &t.stop, qos("stop")?)?,
+            status: publisher(&mut node, &t.status, qos("status")?)?,
+            markers: publisher(&mut node, &t.markers, qos("markers")?)?,
+            path: publisher(&mut node, &t.path, qos("path")?)?,
             cmd_vel_out: relay
-                .then(|| publisher(&mut node, &t.cmd_vel_out, Qos::COMMAND))
+                .then(|| publisher(&mut node, &t.cmd_vel_out, qos("cmd_vel_out")?))
                 .transpose()?,
             bridge,
             node,

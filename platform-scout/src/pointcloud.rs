@@ -97,11 +97,6 @@ impl Datatype {
             Datatype::Float64 => 8,
         }
     }
-
-    /// Whether the type is an integer.
-    pub fn is_integer(self) -> bool {
-        !matches!(self, Datatype::Float32 | Datatype::Float64)
-    }
 }
 
 /// Errors of [`CloudView::new`] and the field readers.
@@ -306,13 +301,35 @@ impl<'a> CloudView<'a> {
         row * self.cloud.row_step as usize + col * self.cloud.point_step as usize
     }
 
+    /// Byte offset of every point, in index order (row-major): the
+    /// `base(i)` of `i` in `0..len()`, without a division per point.
+    fn bases(&self) -> impl Iterator<Item = usize> {
+        let (row_step, point_step) = (self.cloud.row_step as usize, self.cloud.point_step as usize);
+        let width = self.cloud.width as usize;
+        // No row is visited when there is no point (width 0).
+        let height = if self.len == 0 {
+            0
+        } else {
+            self.cloud.height as usize
+        };
+        (0..height)
+            .flat_map(move |row| (0..width).map(move |col| row * row_step + col * point_step))
+    }
+
     /// Element `element` of `field` at point `i`, as `f64` (`None` when
     /// `i >= len()` or `element >= count`).
     pub fn get(&self, field: &Field, i: usize, element: usize) -> Option<f64> {
         if i >= self.len || element >= field.count {
             return None;
         }
-        let start = self.base(i) + field.offset + element * field.datatype.size();
+        self.read(field, self.base(i) + element * field.datatype.size())
+    }
+
+    /// The `field` value `field.offset` bytes after `base` (the start of a
+    /// point from [`bases`](Self::bases), plus the element's offset), or
+    /// `None` when it lies outside `data`.
+    fn read(&self, field: &Field, base: usize) -> Option<f64> {
+        let start = base + field.offset;
         let bytes = self.cloud.data.get(start..start + field.datatype.size())?;
         Some(read_scalar(bytes, field.datatype, self.cloud.is_bigendian))
     }
@@ -325,11 +342,12 @@ impl<'a> CloudView<'a> {
         Ok([self.field("x")?, self.field("y")?, self.field("z")?])
     }
 
-    fn xyz_at(&self, f: &[&Field; 3], i: usize) -> Option<Point3<f64>> {
+    /// The finite `x`, `y`, `z` of the point starting at byte `base`.
+    fn xyz_at(&self, f: &[&Field; 3], base: usize) -> Option<Point3<f64>> {
         let p = Point3::new(
-            self.get(f[0], i, 0)?,
-            self.get(f[1], i, 0)?,
-            self.get(f[2], i, 0)?,
+            self.read(f[0], base)?,
+            self.read(f[1], base)?,
+            self.read(f[2], base)?,
         );
         p.iter().all(|c| c.is_finite()).then_some(p)
     }
@@ -345,8 +363,8 @@ impl<'a> CloudView<'a> {
         let f = self.xyz_fields()?;
         let mut out = Vec::with_capacity(self.len);
         let mut skipped = 0;
-        for i in 0..self.len {
-            match self.xyz_at(&f, i) {
+        for base in self.bases() {
+            match self.xyz_at(&f, base) {
                 Some(p) => out.push(p),
                 None => skipped += 1,
             }
@@ -369,8 +387,8 @@ impl<'a> CloudView<'a> {
             points: Vec::with_capacity(self.len),
             non_finite: 0,
         };
-        for i in 0..self.len {
-            match (self.xyz_at(&f, i), self.get(v, i, 0)) {
+        for base in self.bases() {
+            match (self.xyz_at(&f, base), self.read(v, base)) {
                 (Some(p), Some(value)) if value.is_finite() => {
                     out.points.push((p.cast::<f32>(), value as f32))
                 }
@@ -397,12 +415,12 @@ impl<'a> CloudView<'a> {
             points: Vec::with_capacity(self.len),
             ..LabelledPoints::default()
         };
-        for i in 0..self.len {
-            let Some(p) = self.xyz_at(&f, i) else {
+        for base in self.bases() {
+            let Some(p) = self.xyz_at(&f, base) else {
                 out.non_finite += 1;
                 continue;
             };
-            let label = self.get(l, i, 0).unwrap_or(f64::NAN);
+            let label = self.read(l, base).unwrap_or(f64::NAN);
             if !(label.fract() == 0.0 && (0.0..=f64::from(u16::MAX)).contains(&label)) {
                 out.bad_label += 1;
                 continue;
@@ -530,6 +548,11 @@ pub fn encode_cloud<'v>(
     // Validate the layout on an empty cloud first.
     CloudView::new(&cloud)?;
     let step = point_step as usize;
+    // Whether each field is a coordinate (a non-finite one clears is_dense).
+    let coordinate: Vec<bool> = fields
+        .iter()
+        .map(|f| matches!(f.name.as_str(), "x" | "y" | "z"))
+        .collect();
     let mut width: u32 = 0;
     for row in rows {
         if row.len() < fields.len() {
@@ -538,8 +561,8 @@ pub fn encode_cloud<'v>(
         }
         let start = cloud.data.len();
         cloud.data.resize(start + step, 0);
-        for (f, &v) in fields.iter().zip(row) {
-            if matches!(f.name.as_str(), "x" | "y" | "z") && !v.is_finite() {
+        for ((f, &v), &coordinate) in fields.iter().zip(row).zip(&coordinate) {
+            if coordinate && !v.is_finite() {
                 cloud.is_dense = false;
             }
             let o = start + f.offset as usize;

@@ -148,6 +148,34 @@ fn contract_defaults_types_and_qos() {
 }
 
 #[test]
+fn contract_qos_lookup_of_every_node_endpoint() {
+    // RobotNode takes each endpoint's QoS from this lookup.
+    let t = Topics::default();
+    for role in [
+        "odometry",
+        "occupancy",
+        "traversability",
+        "semantics",
+        "cmd_vel_in",
+    ] {
+        assert_eq!(t.qos(role), Some(Qos::SENSOR), "{role}");
+    }
+    for role in [
+        "target",
+        "way_point",
+        "joy",
+        "stop",
+        "status",
+        "markers",
+        "path",
+        "cmd_vel_out",
+    ] {
+        assert_eq!(t.qos(role), Some(Qos::COMMAND), "{role}");
+    }
+    assert_eq!(t.qos("no_such_role"), None);
+}
+
+#[test]
 fn ros_names() {
     for ok in ["/way_point", "/sornav/status", "/a1/b_2"] {
         assert!(is_ros_name(ok), "{ok}");

@@ -14,9 +14,9 @@ use sornav_platform_scout::bridge::{NodeState, Status};
 use sornav_platform_scout::config::ScoutConfig;
 use sornav_platform_scout::contract::Qos;
 use sornav_platform_scout::msg::*;
-use sornav_platform_scout::netns;
 use sornav_platform_scout::node::{self, RobotNode};
 use sornav_platform_scout::pointcloud::{encode_xyzi, encode_xyzl};
+use sornav_test_support::netns;
 
 mod common;
 use common::room;

@@ -361,6 +361,16 @@ impl Agent {
         &self.decisions
     }
 
+    /// The latest decision (kept when the log is taken).
+    pub fn last_decision(&self) -> Option<&Decision> {
+        self.last_decision.as_ref()
+    }
+
+    /// The latest mission outcome.
+    pub fn last_outcome(&self) -> Option<&MissionOutcome> {
+        self.last_outcome.as_ref()
+    }
+
     /// Takes the decision log (for streaming it to a file).
     pub fn take_decisions(&mut self) -> Vec<Decision> {
         std::mem::take(&mut self.decisions)

@@ -159,12 +159,6 @@ impl Observation {
         }
     }
 
-    /// Whether the frame carries semantic labels (depth or labelled cloud);
-    /// an [`OccupancyObservation`] does not.
-    pub fn is_semantic(&self) -> bool {
-        !matches!(self.sensor, Sensor::Occupancy(_))
-    }
-
     /// The frame's returns as world points for the occupancy grid, and the
     /// number left out.
     ///

@@ -2,14 +2,13 @@
 //! `TcpListener` on 127.0.0.1:0): every documented outcome.
 #![cfg(feature = "llm")]
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::{TcpListener, TcpStream};
+use std::net::TcpListener;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::{Arc, Mutex};
 use std::thread;
 use std::time::{Duration, Instant};
 
-use serde_json::{Value, json};
+use serde_json::Value;
 use sornav_supervisor::llm::transport::{
     HttpTransport, RecordingTransport, ReplayTransport, Transport,
 };
@@ -18,88 +17,7 @@ use sornav_supervisor::{
     Candidate, CandidateObject, ContextObject, ContextPolicy, LlmConfig, LlmPolicy, PolicyAction,
     RegionSnapshot, Situation,
 };
-
-/// What the fake server answers: status, body, delay.
-type Handler = dyn Fn(&Value) -> (u16, String, Duration) + Send + Sync;
-
-struct Server {
-    base_url: String,
-    requests: Arc<Mutex<Vec<Value>>>,
-    hits: Arc<AtomicUsize>,
-}
-
-fn read_request(stream: &mut TcpStream) -> Option<Value> {
-    let mut reader = BufReader::new(stream.try_clone().ok()?);
-    let mut line = String::new();
-    reader.read_line(&mut line).ok()?;
-    if !line.starts_with("POST /v1/chat/completions ") {
-        return None;
-    }
-    let mut length = 0usize;
-    loop {
-        line.clear();
-        reader.read_line(&mut line).ok()?;
-        let l = line.trim_end();
-        if l.is_empty() {
-            break;
-        }
-        if let Some((k, v)) = l.split_once(':')
-            && k.eq_ignore_ascii_case("content-length")
-        {
-            length = v.trim().parse().ok()?;
-        }
-    }
-    let mut body = vec![0; length];
-    reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
-}
-
-fn serve(handler: Arc<Handler>) -> Server {
-    let listener = TcpListener::bind("127.0.0.1:0").expect("bind loopback");
-    let base_url = format!("http://{}/v1", listener.local_addr().unwrap());
-    let requests = Arc::new(Mutex::new(Vec::new()));
-    let hits = Arc::new(AtomicUsize::new(0));
-    let (req2, hits2) = (Arc::clone(&requests), Arc::clone(&hits));
-    thread::spawn(move || {
-        for stream in listener.incoming() {
-            let Ok(mut stream) = stream else { continue };
-            let handler = Arc::clone(&handler);
-            let (req3, hits3) = (Arc::clone(&req2), Arc::clone(&hits2));
-            thread::spawn(move || {
-                let Some(body) = read_request(&mut stream) else {
-                    let _ = stream.write_all(
-                        b"HTTP/1.1 404 Not Found\r\ncontent-length: 0\r\nconnection: close\r\n\r\n",
-                    );
-                    return;
-                };
-                hits3.fetch_add(1, Ordering::SeqCst);
-                let (status, reply, delay) = handler(&body);
-                req3.lock().unwrap().push(body);
-                thread::sleep(delay);
-                let text = format!(
-                    "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{reply}",
-                    reply.len()
-                );
-                let _ = stream.write_all(text.as_bytes());
-            });
-        }
-    });
-    Server {
-        base_url,
-        requests,
-        hits,
-    }
-}
-
-/// A chat completion whose message content is `content`.
-fn completion(content: &str) -> String {
-    json!({
-        "id": "chatcmpl-1", "object": "chat.completion", "created": 0, "model": "test",
-        "choices": [{"index": 0, "finish_reason": "stop", "message": {"role": "assistant", "content": content}}],
-        "usage": {"prompt_tokens": 1, "completion_tokens": 1, "total_tokens": 2}
-    })
-    .to_string()
-}
+use sornav_test_support::chat_server::{ChatServer as Server, Handler, completion, serve};
 
 fn fixed(status: u16, content: &str) -> Arc<Handler> {
     let body = if status == 200 {

@@ -11,6 +11,10 @@
 //!   (CI must never silently skip), and otherwise prints a skip message and
 //!   returns `None`.
 //! * [`shared_root`] only locates the root, without the rule.
+//! * [`chat_server`] is a loopback OpenAI-compatible server for the tests
+//!   of the LLM context policy.
+//! * [`netns`] runs DDS tests inside a private network namespace
+//!   (`unshare --net`, only `lo`).
 //!
 //! # Example
 //! ```no_run
@@ -21,6 +25,9 @@
 //! ```
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
+
+pub mod chat_server;
+pub mod netns;
 
 use std::path::{Path, PathBuf};
 

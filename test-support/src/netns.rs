@@ -2,7 +2,7 @@
 //!
 //! DDS discovers peers by multicast on every interface it is allowed to use.
 //! Besides restricting participants to loopback
-//! ([`node::loopback_context`](crate::node::loopback_context)), every test
+//! (`sornav_platform_scout::node::loopback_context`), every test
 //! that starts a participant runs inside a fresh network namespace whose
 //! only interface is `lo`, so nothing can leave the machine even if the
 //! restriction had a bug:
@@ -10,7 +10,7 @@
 //! ```no_run
 //! #[test]
 //! fn talks_over_dds() {
-//!     if !sornav_platform_scout::netns::isolate("talks_over_dds") {
+//!     if !sornav_test_support::netns::isolate("talks_over_dds") {
 //!         return; // the isolated child ran (and passed), or isolation is unavailable
 //!     }
 //!     // Here: inside `unshare --net` with only `lo` up.
@@ -26,6 +26,8 @@
 //! message, and fails when `CI` is `true`.
 
 use std::process::Command;
+
+use crate::in_ci;
 
 /// Set to `1` in the re-executed child.
 pub const CHILD_ENV: &str = "SORNAV_NETNS_CHILD";
@@ -47,16 +49,6 @@ pub fn interfaces() -> Option<Vec<String>> {
 /// Whether this process sees no interface but `lo`.
 pub fn only_loopback() -> bool {
     interfaces().is_some_and(|i| i.iter().all(|n| n == "lo"))
-}
-
-/// Whether `CI` is `true` or `1`.
-pub fn in_ci() -> bool {
-    matches!(
-        std::env::var("CI")
-            .map(|v| v.to_ascii_lowercase())
-            .as_deref(),
-        Ok("true") | Ok("1")
-    )
 }
 
 /// Whether `unshare --net` works here (root or user namespaces).
