@@ -818,6 +818,12 @@ impl Bridge {
         let clock = agent.last_step().map_or(now, |t| t.max(now));
         let result = agent.step(clock);
         self.stats.steps += 1;
+        // The node runs for hours: the agent's decision log is drained here
+        // (to the log) so that it does not grow without bound; the status
+        // reports `Agent::last_decision`.
+        for d in agent.take_decisions() {
+            tracing::debug!(step = ?d.step, action = %d.action, reason = %d.reason, "decision");
+        }
         match result {
             Ok(AgentCommand::Dispatch { mission, .. }) => {
                 out.extend(self.mission_messages(&mission, now));
@@ -868,7 +874,7 @@ impl Bridge {
                 waypoint: [m.waypoint.x, m.waypoint.y, m.waypoint.z],
             }),
             last_decision: agent
-                .and_then(|a| a.decisions().last())
+                .and_then(Agent::last_decision)
                 .map(|d| DecisionStatus {
                     at_s: d.at.as_secs_f64(),
                     step: d.step,

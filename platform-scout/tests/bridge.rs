@@ -330,6 +330,11 @@ fn finds_the_tv_then_switches_target_keeping_the_maps() {
     assert_eq!(s.confirmed.len(), 1);
     assert_eq!(s.confirmed[0].category, "tv_monitor");
     assert!((s.confirmed[0].centre[0] + 0.95).abs() < 0.1);
+    // The status reports the confirming decision while the agent's log is
+    // drained at every step (it would otherwise grow for as long as the
+    // node runs).
+    assert_eq!(s.last_decision.as_ref().unwrap().action, "stop");
+    assert!(b.agent().unwrap().decisions().is_empty());
     assert!(
         waypoints(&out).contains(&Point::new(nav.x, nav.y, 0.0)),
         "hold at the target"
