@@ -467,20 +467,24 @@ impl Bridge {
         let mut l: usize = self.labelled.iter().map(Vec::len).sum();
         let mut u: usize = self.unlabelled.iter().map(Vec::len).sum();
         while l + u > cap {
-            // Drop the oldest cloud of the larger buffer.
-            let dropped = if l >= u {
-                let n = self.labelled.pop_front().map_or(0, |c| c.len());
-                l -= n;
-                n
+            // Drop the oldest cloud of the larger buffer (never empty: its
+            // total is positive). Empty clouds (every point skipped) are
+            // dropped like any other.
+            let from_labelled = l >= u;
+            let dropped = if from_labelled {
+                self.labelled.pop_front().map(|c| c.len())
             } else {
-                let n = self.unlabelled.pop_front().map_or(0, |c| c.len());
-                u -= n;
-                n
+                self.unlabelled.pop_front().map(|c| c.len())
             };
-            if dropped == 0 {
+            let Some(n) = dropped else {
                 break;
+            };
+            if from_labelled {
+                l -= n;
+            } else {
+                u -= n;
             }
-            self.stats.dropped_points += dropped as u64;
+            self.stats.dropped_points += n as u64;
         }
     }
 

@@ -231,6 +231,21 @@ fn point_cap_drops_the_oldest_clouds() {
     b.on_semantic_scan(&semantic(&cloud), ms(0)).unwrap();
     b.on_semantic_scan(&semantic(&cloud), ms(0)).unwrap();
     assert_eq!(b.stats().dropped_points, 6);
+
+    // A cloud whose points were all skipped sits at the front of the
+    // buffer: it must not stop the trimming.
+    let mut c = config();
+    c.inputs.max_points_per_observation = 10;
+    let mut b = Bridge::new(c).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    let all_nan = [[f64::NAN, 0.0, 0.3, 1.0]];
+    assert_eq!(b.on_semantic_scan(&semantic(&all_nan), ms(0)).unwrap(), 0);
+    b.on_semantic_scan(&semantic(&cloud), ms(0)).unwrap();
+    b.on_semantic_scan(&semantic(&cloud), ms(0)).unwrap();
+    assert_eq!(b.stats().dropped_points, 6);
+    b.tick(ms(0));
+    assert_eq!(b.agent().unwrap().semantic_map().integrations(), 1);
+    assert_eq!(b.agent().unwrap().stats().observations, 1);
 }
 
 /// Drives the bridge in the room: returns the outputs of every tick.
