@@ -170,13 +170,11 @@ impl NavMesh {
     /// # Complexity
     /// O(S log S) worst case (Dijkstra stopped at the target).
     pub fn distance(&self, a: &Point3<f64>, b: &Point3<f64>) -> Result<f64, NavError> {
-        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
-        if sa == sb {
-            return Ok((a - b).norm());
-        }
-        if self.spans()[sa as usize].region != self.spans()[sb as usize].region {
-            return Ok(f64::INFINITY);
-        }
+        let (sa, sb) = match self.locate_pair(a, b)? {
+            Pair::Same => return Ok((a - b).norm()),
+            Pair::Apart => return Ok(f64::INFINITY),
+            Pair::Connected(sa, sb) => (sa, sb),
+        };
         let (ca, cb) = (self.span_center(sa), self.span_center(sb));
         let (dist, _) = dijkstra(self, &[(sa, 0.0)], Some(sb));
         Ok((a - ca).norm() + dist[sb as usize] + (b - cb).norm())
@@ -195,13 +193,11 @@ impl NavMesh {
         a: &Point3<f64>,
         b: &Point3<f64>,
     ) -> Result<Option<Vec<Point3<f64>>>, NavError> {
-        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
-        if sa == sb {
-            return Ok(Some(vec![*a, *b]));
-        }
-        if self.spans()[sa as usize].region != self.spans()[sb as usize].region {
-            return Ok(None);
-        }
+        let (sa, sb) = match self.locate_pair(a, b)? {
+            Pair::Same => return Ok(Some(vec![*a, *b])),
+            Pair::Apart => return Ok(None),
+            Pair::Connected(sa, sb) => (sa, sb),
+        };
         let (dist, parent) = dijkstra(self, &[(sa, 0.0)], Some(sb));
         if !dist[sb as usize].is_finite() {
             return Ok(None);
@@ -223,7 +219,28 @@ impl NavMesh {
     /// # Errors
     /// [`NavError`] when either point cannot be snapped.
     pub fn connected(&self, a: &Point3<f64>, b: &Point3<f64>) -> Result<bool, NavError> {
-        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
-        Ok(self.spans()[sa as usize].region == self.spans()[sb as usize].region)
+        Ok(!matches!(self.locate_pair(a, b)?, Pair::Apart))
     }
+
+    /// Snaps `a` and `b` to spans and classifies the pair.
+    fn locate_pair(&self, a: &Point3<f64>, b: &Point3<f64>) -> Result<Pair, NavError> {
+        let (sa, sb) = (locate(self, a)?, locate(self, b)?);
+        Ok(if sa == sb {
+            Pair::Same
+        } else if self.spans()[sa as usize].region != self.spans()[sb as usize].region {
+            Pair::Apart
+        } else {
+            Pair::Connected(sa, sb)
+        })
+    }
+}
+
+/// Two query points snapped to spans.
+enum Pair {
+    /// Both over the same span.
+    Same,
+    /// On spans of different regions (islands).
+    Apart,
+    /// On different spans of one region.
+    Connected(SpanId, SpanId),
 }

@@ -227,9 +227,7 @@ impl MeshBuilder {
         let base = self.vertices.len() as u32;
         for p in [a, b, c] {
             self.vertices.push([p.x as f32, p.y as f32, p.z as f32]);
-            if let Some(i) = self.instances.get_mut(inst as usize) {
-                i.bounds.include(&p);
-            }
+            self.include_in_bounds(inst, p);
         }
         self.triangles.push([base, base + 1, base + 2]);
         self.triangle_instances.push(inst);

@@ -87,3 +87,19 @@ pub use noise::{NoiseConfig, NoiseModel};
 pub use policy::{Oracle, Policy, RandomWalk, StopAtOnce};
 pub use render::{Bvh, Camera, CameraConfig, CameraPose, Frame, RenderError};
 pub use run::{Observation, RunConfig, SimConfig, SimError, Simulator, run_episode};
+
+/// Writes an 8-bit RGB image (`data`: `width * height` pixels, row-major) as
+/// a PNG file; encoder failures are wrapped with [`std::io::Error::other`].
+pub(crate) fn write_rgb_png(
+    path: &std::path::Path,
+    width: u32,
+    height: u32,
+    data: &[u8],
+) -> std::io::Result<()> {
+    let file = std::fs::File::create(path)?;
+    let mut enc = png::Encoder::new(std::io::BufWriter::new(file), width, height);
+    enc.set_color(png::ColorType::Rgb);
+    enc.set_depth(png::BitDepth::Eight);
+    let mut w = enc.write_header().map_err(std::io::Error::other)?;
+    w.write_image_data(data).map_err(std::io::Error::other)
+}

@@ -827,10 +827,6 @@ impl NavMesh {
     /// # Errors
     /// [`SceneError::Io`] when the file cannot be written.
     pub fn save_topdown_png(&self, path: &Path) -> Result<(), SceneError> {
-        let io = |e: std::io::Error| SceneError::Io {
-            path: path.to_path_buf(),
-            source: e,
-        };
         let (w, h) = (self.width, self.height);
         let (mut zmin, mut zmax) = (f32::MAX, f32::MIN);
         for s in &self.spans {
@@ -854,16 +850,10 @@ impl NavMesh {
             img[o + 1] = (200 - (hue as u32 * 100 / 256) as u8) / 2 + 100;
             img[o + 2] = (255.0 - 175.0 * t) as u8;
         }
-        let file = std::fs::File::create(path).map_err(io)?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), w as u32, h as u32);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
-        let mut wr = enc
-            .write_header()
-            .map_err(|e| io(std::io::Error::other(e)))?;
-        wr.write_image_data(&img)
-            .map_err(|e| io(std::io::Error::other(e)))?;
-        Ok(())
+        crate::write_rgb_png(path, w as u32, h as u32, &img).map_err(|source| SceneError::Io {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 }
 

@@ -2,7 +2,7 @@
 //! for sanity checks and tests: [`RandomWalk`], [`StopAtOnce`] and the
 //! ground-truth [`Oracle`].
 
-use std::collections::{HashMap, VecDeque};
+use std::collections::{HashSet, VecDeque};
 
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -159,9 +159,9 @@ impl Oracle {
                 (a.yaw() * 1000.0).round() as i64,
             )
         };
-        let mut seen: HashMap<_, ()> = HashMap::new();
+        let mut seen = HashSet::new();
         let mut queue = VecDeque::new();
-        seen.insert(key(start), ());
+        seen.insert(key(start));
         queue.push_back((start.clone(), Vec::new()));
         while let Some((agent, path)) = queue.pop_front() {
             if path.len() >= self.search_depth {
@@ -172,7 +172,7 @@ impl Oracle {
                 if next.step(nav, a).collided {
                     continue;
                 }
-                if seen.insert(key(&next), ()).is_some() {
+                if !seen.insert(key(&next)) {
                     continue;
                 }
                 let mut p = path.clone();

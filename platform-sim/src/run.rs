@@ -205,7 +205,7 @@ impl Simulator {
     /// goal's object id is an instance of this scene with that category, else
     /// to the goal's centre.
     pub fn distance_to_goal_objects(&self, episode: &Episode, feet: &Point3<f64>) -> f64 {
-        let top = feet.z + self.config.camera.mount_height;
+        let height = self.config.camera.mount_height;
         episode
             .goals
             .iter()
@@ -219,8 +219,7 @@ impl Simulator {
                         min: g.position,
                         max: g.position,
                     });
-                let dz = (bounds.min.z - top).max(feet.z - bounds.max.z).max(0.0);
-                bounds.distance_xy(feet).hypot(dz)
+                bounds.body_distance(feet, height)
             })
             .fold(f64::INFINITY, f64::min)
     }

@@ -98,6 +98,14 @@ impl Aabb {
         let dy = (self.min.y - p.y).max(p.y - self.max.y).max(0.0);
         dx.hypot(dy)
     }
+    /// Distance from an agent body (the vertical segment
+    /// `[feet.z, feet.z + height]`) to the box (0 when they touch).
+    pub fn body_distance(&self, feet: &Point3<f64>, height: f64) -> f64 {
+        let dz = (self.min.z - (feet.z + height))
+            .max(feet.z - self.max.z)
+            .max(0.0);
+        self.distance_xy(feet).hypot(dz)
+    }
 }
 
 /// One storey of a building.

@@ -532,10 +532,15 @@ fn build_home(
     }
 
     let mut b = MeshBuilder::new();
+    // the level of each piece (the first unknown one is the error)
+    let piece_levels: Vec<usize> = home
+        .pieces
+        .iter()
+        .map(|p| level_of(&p.level, &|| p.element.clone()))
+        .collect::<Result<_, SceneError>>()?;
     // staircase footprints with their vertical range
     let mut stairs: Vec<(Vec<Point2<f64>>, f64, f64)> = Vec::new();
-    for p in &home.pieces {
-        let l = level_of(&p.level, &|| p.element.clone())?;
+    for (p, &l) in home.pieces.iter().zip(&piece_levels) {
         if p.staircase && p.visible && built(l) {
             let z0 = levels[l].level.elevation + p.elevation / 100.0;
             stairs.push((footprint(p), z0, z0 + p.height / 100.0));
@@ -577,11 +582,12 @@ fn build_home(
                 .map(|(f, _, _)| f)
                 .collect()
         };
+        let triangles: Vec<Vec<Point2<f64>>> = triangulate(&poly)
+            .into_iter()
+            .map(|t| t.iter().map(|&i| poly[i]).collect())
+            .collect();
         let pieces = |z: f64| -> Vec<Vec<Point2<f64>>> {
-            let mut out: Vec<Vec<Point2<f64>>> = triangulate(&poly)
-                .into_iter()
-                .map(|t| t.iter().map(|&i| poly[i]).collect())
-                .collect();
+            let mut out = triangles.clone();
             for h in holes_at(z) {
                 out = out
                     .into_iter()
@@ -606,13 +612,14 @@ fn build_home(
         }
     }
 
-    // walls with openings
-    let openings: Vec<(usize, &XmlPiece)> = home
+    // walls with openings: (level, piece, footprint)
+    let openings: Vec<(usize, &XmlPiece, Vec<Point2<f64>>)> = home
         .pieces
         .iter()
-        .filter(|p| p.door_or_window && p.visible)
-        .map(|p| Ok((level_of(&p.level, &|| p.element.clone())?, p)))
-        .collect::<Result<_, SceneError>>()?;
+        .zip(&piece_levels)
+        .filter(|(p, _)| p.door_or_window && p.visible)
+        .map(|(p, &l)| (l, p, footprint(p)))
+        .collect();
     for w in &home.walls {
         let l = level_of(&w.level, &|| format!("wall '{}'", w.id))?;
         if !built(l) {
@@ -661,14 +668,13 @@ fn build_home(
             };
             let height_at = |d: f64| h0 + (h1 - h0) * ((acc + d) / total).clamp(0.0, 1.0);
             let mut cuts = Vec::new();
-            for (ol, p) in &openings {
+            for (ol, p, fp) in &openings {
                 if *ol != l {
                     continue;
                 }
-                let fp = footprint(p);
                 let nrm = Vector2::new(-u.y, u.x);
                 let (mut lo, mut hi, mut nlo, mut nhi) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-                for q in &fp {
+                for q in fp {
                     let v = q - a;
                     lo = lo.min(v.dot(&u));
                     hi = hi.max(v.dot(&u));
@@ -705,8 +711,7 @@ fn build_home(
 
     // furniture, doors, windows
     let mut cache: HashMap<String, Arc<ObjMesh>> = HashMap::new();
-    for p in &home.pieces {
-        let l = level_of(&p.level, &|| p.element.clone())?;
+    for (p, &l) in home.pieces.iter().zip(&piece_levels) {
         if !p.visible || !built(l) {
             continue;
         }

@@ -8,9 +8,11 @@ use sornav_platform_sim::category::MP3D_GOALS;
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
 use sornav_platform_sim::geometry::MeshBuilder;
 use sornav_platform_sim::{
-    CameraConfig, Episode, InstanceKind, Level, NavMesh, NavMeshConfig, ProceduralConfig, Scene,
+    CameraConfig, Episode, InstanceKind, NavMesh, NavMeshConfig, ProceduralConfig, Scene,
     SimConfig, Simulator,
 };
+
+mod common;
 
 /// A 6 m x 5 m floor slab of `floor_kind` with a 1.6 m x 2.1 m "bed" box,
 /// 0.5 m high, in its middle.
@@ -20,13 +22,7 @@ fn room_with_bed(floor_kind: InstanceKind) -> Scene {
     b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(6.0, 5.0, 0.0), f);
     let bed = b.add_instance(InstanceKind::Object, "bed", "bed", 0);
     b.aabb_box(Point3::new(2.0, 1.5, 0.0), Point3::new(3.6, 3.6, 0.5), bed);
-    let level = Level {
-        name: "0".into(),
-        elevation: 0.0,
-        height: 2.5,
-        floor_thickness: 0.1,
-    };
-    Scene::from_description(b.finish("bed", vec![level], vec![])).unwrap()
+    common::one_level_scene(b, "bed")
 }
 
 #[test]

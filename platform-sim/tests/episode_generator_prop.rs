@@ -2,36 +2,13 @@
 //! on small random houses, checked with independent tools (a fresh geodesic
 //! field, parry's ray caster), and generation is deterministic.
 
-use nalgebra::{Point3, Vector3};
+use nalgebra::Vector3;
 use proptest::prelude::*;
 use sornav_platform_sim::episodes::generator::body_distance;
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
 use sornav_platform_sim::{Episode, ProceduralConfig, Scene, Simulator};
 
 mod common;
-
-/// Whether some ray from `eye` to one of the 27 sample points of the
-/// object's bounds first hits the object (parry's ray cast on the scene).
-fn sees(scene: &Scene, eye: &Point3<f64>, object: u32) -> bool {
-    let b = scene.instance(object).unwrap().bounds;
-    const F: [f64; 3] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
-    F.iter().any(|&i| {
-        F.iter().any(|&j| {
-            F.iter().any(|&k| {
-                let t = b.min
-                    + Vector3::new(
-                        (b.max.x - b.min.x) * i,
-                        (b.max.y - b.min.y) * j,
-                        (b.max.z - b.min.z) * k,
-                    );
-                let d = t - eye;
-                scene
-                    .cast_ray(eye, &d, d.norm() + 1e-3)
-                    .is_some_and(|h| h.instance == object)
-            })
-        })
-    })
-}
 
 fn check(sim: &Simulator, episodes: &[Episode], cfg: &GeneratorConfig) -> Result<(), String> {
     let (scene, nav) = (sim.scene(), sim.nav());
@@ -85,7 +62,7 @@ fn check(sim: &Simulator, episodes: &[Episode], cfg: &GeneratorConfig) -> Result
                     ));
                 }
                 let eye = v.position + Vector3::new(0.0, 0.0, cam_h);
-                if !sees(scene, &eye, object.id) {
+                if !common::sees(scene, &eye, object) {
                     return Err(format!(
                         "episode {id}: view point {} does not see object {}",
                         v.position, object.id

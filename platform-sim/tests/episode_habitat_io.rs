@@ -3,6 +3,7 @@
 use std::path::{Path, PathBuf};
 
 use serde_json::Value;
+use sornav_platform_sim::agent::wrap_angle;
 use sornav_platform_sim::episodes::{
     HabitatDataset, point_from_habitat, point_to_habitat, yaw_from_habitat, yaw_to_habitat,
 };
@@ -108,8 +109,7 @@ fn every_val_mini_file_parses_and_round_trips_losslessly() {
 }
 
 fn angle_diff(a: f64, b: f64) -> f64 {
-    let d = (a - b).rem_euclid(std::f64::consts::TAU);
-    d.min(std::f64::consts::TAU - d)
+    wrap_angle(a - b).abs()
 }
 
 #[test]

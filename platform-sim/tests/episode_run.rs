@@ -59,32 +59,11 @@ fn check_constraints(sim: &Simulator, episodes: &[Episode], config: &GeneratorCo
                 assert!(body_distance(obj, &v.position, cam_h) <= config.view_point_radius + 1e-9);
                 // Some ray from the eye to the object's box first hits the object.
                 let eye = v.position + nalgebra::Vector3::new(0.0, 0.0, cam_h);
-                let b = obj.bounds;
-                // The generator's 27 sample points, re-cast with parry's ray caster.
-                const F: [f64; 3] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
-                let f = &F;
-                let samples: Vec<(f64, f64, f64)> = f
-                    .iter()
-                    .flat_map(|&i| {
-                        f.iter()
-                            .flat_map(move |&j| f.iter().map(move |&k| (i, j, k)))
-                    })
-                    .collect();
-                let seen = samples.into_iter().any(|(i, j, k)| {
-                    let t = Point3::new(
-                        b.min.x + (b.max.x - b.min.x) * i,
-                        b.min.y + (b.max.y - b.min.y) * j,
-                        b.min.z + (b.max.z - b.min.z) * k,
-                    );
-                    let d = t - eye;
-                    scene
-                        .cast_ray(&eye, &d, d.norm() + 1e-3)
-                        .is_some_and(|h| h.instance == obj.id)
-                });
                 assert!(
-                    seen,
+                    common::sees(scene, &eye, obj),
                     "view point {:?} does not see object {}",
-                    v.position, obj.id
+                    v.position,
+                    obj.id
                 );
             }
         }

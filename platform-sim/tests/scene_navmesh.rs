@@ -3,10 +3,10 @@
 
 use std::sync::OnceLock;
 
-use nalgebra::{Point2, Point3};
+use nalgebra::Point3;
 use proptest::prelude::*;
 use sornav_platform_sim::geometry::MeshBuilder;
-use sornav_platform_sim::{InstanceKind, Level, NavMesh, NavMeshConfig, Scene};
+use sornav_platform_sim::{InstanceKind, NavMesh, NavMeshConfig, Scene};
 
 mod common;
 
@@ -19,22 +19,30 @@ fn house() -> &'static (Scene, NavMesh) {
     })
 }
 
-/// A floor plate with boxes of random size and height on it.
-fn box_world(boxes: &[(f64, f64, f64, f64, f64)]) -> Scene {
+/// A mesh with a 0.1 m thick floor plate `width` x 3 m (top at z = 0).
+fn floor_plate(width: f64) -> MeshBuilder {
     let mut b = MeshBuilder::new();
     let f = b.add_instance(InstanceKind::Floor, "floor", "floor", 0);
-    b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(4.0, 3.0, 0.0), f);
+    b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(width, 3.0, 0.0), f);
+    b
+}
+
+/// A floor plate with boxes of random size and height on it.
+fn box_world(boxes: &[(f64, f64, f64, f64, f64)]) -> Scene {
+    let mut b = floor_plate(4.0);
     for &(x, y, w, d, h) in boxes {
         let i = b.add_instance(InstanceKind::Object, "box", "box", 0);
         b.aabb_box(Point3::new(x, y, 0.0), Point3::new(x + w, y + d, h), i);
     }
-    let level = Level {
-        name: "0".into(),
-        elevation: 0.0,
-        height: 2.5,
-        floor_thickness: 0.1,
-    };
-    Scene::from_description(b.finish("boxes", vec![level], vec![])).unwrap()
+    common::one_level_scene(b, "boxes")
+}
+
+/// Islands of any size kept (other options default).
+fn all_islands() -> NavMeshConfig {
+    NavMeshConfig {
+        min_region_area: 0.0,
+        ..Default::default()
+    }
 }
 
 fn raw_config() -> NavMeshConfig {
@@ -100,11 +108,7 @@ fn geodesic_field_matches_reference_dijkstra() {
         (2.5, 1.2, 0.4, 1.8, 0.5),
         (0.3, 2.2, 1.0, 0.3, 0.15),
     ]);
-    let cfg = NavMeshConfig {
-        min_region_area: 0.0,
-        ..Default::default()
-    };
-    let nav = NavMesh::build(&scene, &cfg).unwrap();
+    let nav = NavMesh::build(&scene, &all_islands()).unwrap();
     for src in [0u32, nav.span_count() as u32 / 2] {
         let goal = nav.span_center(src);
         let field = nav.geodesic_field(&[goal]).unwrap();
@@ -241,14 +245,7 @@ fn field_near_goal_respects_walls() {
 fn erosion_keeps_agent_radius_from_walls() {
     // a single 1 m wide corridor: after erosion by 0.18 m about 0.6 m remain
     let scene = box_world(&[(0.0, 0.0, 4.0, 1.0, 2.0), (0.0, 2.0, 4.0, 1.0, 2.0)]);
-    let nav = NavMesh::build(
-        &scene,
-        &NavMeshConfig {
-            min_region_area: 0.0,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let nav = NavMesh::build(&scene, &all_islands()).unwrap();
     for y in [1.05, 1.15, 1.85, 1.95] {
         assert!(
             !nav.is_navigable(&Point3::new(2.0, y, 0.0)),
@@ -261,21 +258,13 @@ fn erosion_keeps_agent_radius_from_walls() {
             "y = {y} should be free"
         );
     }
-    let _ = Point2::new(0.0, 0.0);
 }
 
 #[test]
 fn steps_connect_only_up_to_max_step() {
     // platforms of 0.15 m and 0.3 m next to the floor
     let scene = box_world(&[(1.0, 0.5, 1.0, 2.0, 0.15), (2.5, 0.5, 1.0, 2.0, 0.3)]);
-    let nav = NavMesh::build(
-        &scene,
-        &NavMeshConfig {
-            min_region_area: 0.0,
-            ..Default::default()
-        },
-    )
-    .unwrap();
+    let nav = NavMesh::build(&scene, &all_islands()).unwrap();
     let floor = Point3::new(0.5, 1.5, 0.0);
     let low = Point3::new(1.5, 1.5, 0.15);
     let high = Point3::new(3.0, 1.5, 0.3);
@@ -287,9 +276,7 @@ fn steps_connect_only_up_to_max_step() {
 /// A floor plate with solid boxes (x0, y0, z0, x1, y1, z1) and one-sided ramps
 /// (x0, y0, width, run, slope in degrees) rising along +x from the floor.
 fn world(boxes: &[[f64; 6]], ramps: &[(f64, f64, f64, f64, f64)]) -> Scene {
-    let mut b = MeshBuilder::new();
-    let f = b.add_instance(InstanceKind::Floor, "floor", "floor", 0);
-    b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(6.0, 3.0, 0.0), f);
+    let mut b = floor_plate(6.0);
     for q in boxes {
         let i = b.add_instance(InstanceKind::Object, "box", "box", 0);
         b.aabb_box(
@@ -310,13 +297,7 @@ fn world(boxes: &[[f64; 6]], ramps: &[(f64, f64, f64, f64, f64)]) -> Scene {
             i,
         );
     }
-    let level = Level {
-        name: "0".into(),
-        elevation: 0.0,
-        height: 2.5,
-        floor_thickness: 0.1,
-    };
-    Scene::from_description(b.finish("world", vec![level], vec![])).unwrap()
+    common::one_level_scene(b, "world")
 }
 
 /// No erosion (agent radius 0); islands of at least `min_region_area`

@@ -126,9 +126,7 @@ impl GeneratorConfig {
 /// Distance from an agent body (vertical segment `[feet.z, feet.z + height]`)
 /// to an object's bounds.
 pub fn body_distance(object: &ObjectInstance, feet: &Point3<f64>, height: f64) -> f64 {
-    let b = &object.bounds;
-    let dz = (b.min.z - (feet.z + height)).max(feet.z - b.max.z).max(0.0);
-    b.distance_xy(feet).hypot(dz)
+    object.bounds.body_distance(feet, height)
 }
 
 /// View points of one object (see the module docs).
@@ -241,31 +239,25 @@ pub fn generate_episodes(
         return Ok(episodes);
     }
     for category in &config.categories {
-        let goals: Vec<(ObjectGoal, &ObjectInstance)> = scene
+        let goals: Vec<ObjectGoal> = scene
             .objects_of(category)
-            .map(|o| {
-                let g = ObjectGoal {
-                    object_id: u64::from(o.id),
-                    object_name: Some(format!("{}_{}", o.category, o.id)),
-                    category: o.category.clone(),
-                    position: o.bounds.center(),
-                    view_points: goal_view_points(sim, o, config),
-                };
-                (g, o)
+            .map(|o| ObjectGoal {
+                object_id: u64::from(o.id),
+                object_name: Some(format!("{}_{}", o.category, o.id)),
+                category: o.category.clone(),
+                position: o.bounds.center(),
+                view_points: goal_view_points(sim, o, config),
             })
-            .filter(|(g, _)| !g.view_points.is_empty())
+            .filter(|g| !g.view_points.is_empty())
             .collect();
         if goals.is_empty() {
             continue;
         }
-        let all_vps: Vec<Point3<f64>> = goals
-            .iter()
-            .flat_map(|(g, _)| g.view_points.iter().map(|v| v.position))
-            .collect();
-        let field = nav.geodesic_field(&all_vps)?;
+        // One field per goal; the distance to the nearest goal is their
+        // per-span minimum (Dijkstra is exact for each source set).
         let per_goal: Vec<_> = goals
             .iter()
-            .map(|(g, _)| {
+            .map(|g| {
                 nav.geodesic_field(&g.view_points.iter().map(|v| v.position).collect::<Vec<_>>())
             })
             .collect::<Result<_, _>>()?;
@@ -274,7 +266,6 @@ pub fn generate_episodes(
             .fold(config.seed, |h, b| h.rotate_left(7) ^ u64::from(b))
             .wrapping_mul(0x9E37_79B9_7F4A_7C15);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let goal_list: Vec<ObjectGoal> = goals.iter().map(|(g, _)| g.clone()).collect();
         let mut made = 0;
         let mut attempts = 0;
         while made < config.episodes_per_category
@@ -283,18 +274,17 @@ pub fn generate_episodes(
             attempts += 1;
             let s = floor_spans[rng.random_range(0..floor_spans.len())];
             let start = nav.span_center(s);
-            let d = field.span_distance(s);
-            if !(d >= config.min_geodesic && d <= config.max_geodesic) {
-                continue;
-            }
-            // Closest goal by geodesic distance.
-            let (gi, _) = per_goal
+            // Closest goal by geodesic distance (the first on ties).
+            let (gi, d) = per_goal
                 .iter()
                 .enumerate()
                 .map(|(i, f)| (i, f.span_distance(s)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
-                .unwrap_or((0, d));
-            let closest = &goals[gi].0;
+                .unwrap_or((0, f64::INFINITY));
+            if !(d >= config.min_geodesic && d <= config.max_geodesic) {
+                continue;
+            }
+            let closest = &goals[gi];
             let euclid = (closest.position - start).norm();
             let ratio = d / euclid.max(1e-9);
             if ratio < config.geodesic_to_euclid_ratio {
@@ -315,7 +305,7 @@ pub fn generate_episodes(
                 start_position: start,
                 start_yaw: yaw,
                 object_category: category.clone(),
-                goals: goal_list.clone(),
+                goals: goals.clone(),
                 geodesic_distance: Some(d),
                 euclidean_distance: Some(euclid),
                 closest_goal_object_id: Some(closest.object_id),

@@ -7,7 +7,7 @@
 //! and the MP3D 2020 layout (goals inline in each episode, category only in
 //! the goals) are read.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 
@@ -280,12 +280,12 @@ impl HabitatDataset {
         }
         for (scene, episodes) in by_scene {
             let goals = self.goals_by_category.as_ref().map(|g| {
+                let prefixes: BTreeSet<String> = episodes
+                    .iter()
+                    .map(|e| format!("{}_", scene_file(&e.scene_id)))
+                    .collect();
                 g.iter()
-                    .filter(|(k, _)| {
-                        episodes
-                            .iter()
-                            .any(|e| k.starts_with(&format!("{}_", scene_file(&e.scene_id))))
-                    })
+                    .filter(|(k, _)| prefixes.iter().any(|p| k.starts_with(p.as_str())))
                     .map(|(k, v)| (k.clone(), v.clone()))
                     .collect()
             });

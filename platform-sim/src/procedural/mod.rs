@@ -413,9 +413,7 @@ fn sample_room_types(
         .collect();
     // anchors, most likely types first (random order among equals)
     let mut order: Vec<usize> = (0..table.len()).collect();
-    for i in (1..order.len()).rev() {
-        order.swap(i, rng.random_range(0..=i));
-    }
+    shuffle(rng, &mut order);
     order.sort_by(|&a, &b| table[b].2.total_cmp(&table[a].2));
     let mut out = Vec::with_capacity(n);
     for i in order {
@@ -510,6 +508,13 @@ fn split_rooms(
         return;
     }
     out.push((area, first));
+}
+
+/// Fisher-Yates shuffle (from the back, one `random_range(0..=i)` per step).
+fn shuffle<T>(rng: &mut ChaCha8Rng, v: &mut [T]) {
+    for i in (1..v.len()).rev() {
+        v.swap(i, rng.random_range(0..=i));
+    }
 }
 
 fn find(p: &mut [usize], mut i: usize) -> usize {
@@ -792,9 +797,7 @@ pub fn generate_with_stats(
             parent[a] = b;
         }
         let mut order: Vec<usize> = (0..cands.len()).collect();
-        for i in (1..order.len()).rev() {
-            order.swap(i, rng.random_range(0..=i));
-        }
+        shuffle(&mut rng, &mut order);
         for &k in &order {
             let o = cands[k];
             let (a, b) = (find(&mut parent, o.rooms.0), find(&mut parent, o.rooms.1));
@@ -882,8 +885,6 @@ pub fn generate_with_stats(
                     polygon: r.rect.polygon(),
                     floor_z: z,
                 });
-            }
-            if !(r.stair && f > 0) {
                 let fl = b.add_instance(InstanceKind::Floor, "floor", &name, f);
                 b.aabb_box(
                     Point3::new(r.rect.x0, r.rect.y0, z - config.floor_thickness),
@@ -933,9 +934,7 @@ pub fn generate_with_stats(
         }
     }
     if config.shuffled_semantics {
-        for i in (1..lists.len()).rev() {
-            lists.swap(i, rng.random_range(0..=i));
-        }
+        shuffle(&mut rng, &mut lists);
     }
     for ((f, ri, rect), list) in furnished.into_iter().zip(lists) {
         let z = f as f64 * level_h;
@@ -1020,9 +1019,11 @@ pub fn generate_with_stats(
             {
                 continue;
             }
+            // `room.placed` does not change while this piece is placed
+            let viewable = mounted.then(|| viewable(&inner, &room.placed, &door_points));
             let accept = |c: &Candidate| {
-                if mounted {
-                    viewable(&inner, &room.placed, &door_points, &c.foot)
+                if let Some(viewable) = &viewable {
+                    viewable(&c.foot)
                 } else {
                     let mut trial = room.placed.clone();
                     trial.push(c.foot);
@@ -1073,26 +1074,30 @@ pub fn generate_with_stats(
     Scene::from_description(desc)
 }
 
-/// Free cells (0.1 m) of a room where an agent fits between the placed
+/// Cell size (m) of the free-floor grid of a room ([`free_components`]).
+const CELL: f64 = 0.1;
+
+/// Centre of cell `k` of a room's free-floor grid `nx` cells wide.
+fn cell_centre(inner: &Rect, nx: usize, k: usize) -> Point2<f64> {
+    Point2::new(
+        inner.x0 + ((k % nx) as f64 + 0.5) * CELL,
+        inner.y0 + ((k / nx) as f64 + 0.5) * CELL,
+    )
+}
+
+/// Free cells ([`CELL`]) of a room where an agent fits between the placed
 /// footprints, labelled by connected component (`u32::MAX` = blocked).
 fn free_components(inner: &Rect, placed: &[Rect]) -> (Vec<u32>, usize, usize) {
-    const CELL: f64 = 0.1;
     const CLEAR: f64 = 0.3;
     // walls: the navmesh erodes by the agent radius (0.18 m) plus up to one
     // 0.05 m cell of rasterisation, so a cell must keep 0.25 m to the wall
     const WALL_CLEAR: f64 = 0.25;
     let nx = (inner.w() / CELL).floor().max(1.0) as usize;
     let ny = (inner.d() / CELL).floor().max(1.0) as usize;
-    let centre = |i: usize, j: usize| {
-        Point2::new(
-            inner.x0 + (i as f64 + 0.5) * CELL,
-            inner.y0 + (j as f64 + 0.5) * CELL,
-        )
-    };
     let mut label = vec![u32::MAX; nx * ny];
     let free: Vec<bool> = (0..nx * ny)
         .map(|k| {
-            let c = centre(k % nx, k / nx);
+            let c = cell_centre(inner, nx, k);
             c.x - inner.x0 >= WALL_CLEAR
                 && inner.x1 - c.x >= WALL_CLEAR
                 && c.y - inner.y0 >= WALL_CLEAR
@@ -1137,8 +1142,8 @@ fn free_components(inner: &Rect, placed: &[Rect]) -> (Vec<u32>, usize, usize) {
 }
 
 fn cell_of(inner: &Rect, nx: usize, ny: usize, p: &Point2<f64>) -> usize {
-    let i = (((p.x - inner.x0) / 0.1).floor().max(0.0) as usize).min(nx - 1);
-    let j = (((p.y - inner.y0) / 0.1).floor().max(0.0) as usize).min(ny - 1);
+    let i = (((p.x - inner.x0) / CELL).floor().max(0.0) as usize).min(nx - 1);
+    let j = (((p.y - inner.y0) / CELL).floor().max(0.0) as usize).min(ny - 1);
     j * nx + i
 }
 
@@ -1176,10 +1181,7 @@ fn near_component(
 ) -> bool {
     const REACH: f64 = 0.8;
     (0..nx * ny).any(|k| {
-        let c = Point2::new(
-            inner.x0 + ((k % nx) as f64 + 0.5) * 0.1,
-            inner.y0 + ((k / nx) as f64 + 0.5) * 0.1,
-        );
+        let c = cell_centre(inner, nx, k);
         let l = label[k];
         let dx = (foot.x0 - c.x).max(c.x - foot.x1).max(0.0);
         let dy = (foot.y0 - c.y).max(c.y - foot.y1).max(0.0);
@@ -1187,12 +1189,18 @@ fn near_component(
     }) || ny == 0
 }
 
-/// True when a wall-mounted piece with footprint `foot` can be seen from the
-/// doorways' free component.
-fn viewable(inner: &Rect, placed: &[Rect], doors: &[Point2<f64>], foot: &Rect) -> bool {
+/// Test whether a wall-mounted piece with footprint `foot` can be seen from
+/// the doorways' free component, with the free floor of `placed` computed
+/// once.
+fn viewable(
+    inner: &Rect,
+    placed: &[Rect],
+    doors: &[Point2<f64>],
+) -> impl Fn(&Rect) -> bool + use<> {
     let (label, nx, ny) = free_components(inner, placed);
     let comp = doors.first().map(|d| label[cell_of(inner, nx, ny, d)]);
-    near_component(inner, &label, nx, ny, comp, foot)
+    let inner = *inner;
+    move |foot| near_component(&inner, &label, nx, ny, comp, foot)
 }
 
 /// Furniture placed in one room so far.
@@ -1565,8 +1573,9 @@ fn build_walls(
                     })
                     .collect();
             }
-            let seg_box = |b: &mut MeshBuilder, a: f64, e: f64, z0: f64, z1: f64, inst| {
-                let (min, max) = if axis == 0 {
+            // min and max corners of the wall box over [a, e] x [z0, z1]
+            let corners = |a: f64, e: f64, z0: f64, z1: f64| {
+                if axis == 0 {
                     (
                         Point3::new(a, c - t * 0.5, z0),
                         Point3::new(e, c + t * 0.5, z1),
@@ -1576,7 +1585,10 @@ fn build_walls(
                         Point3::new(c - t * 0.5, a, z0),
                         Point3::new(c + t * 0.5, e, z1),
                     )
-                };
+                }
+            };
+            let seg_box = |b: &mut MeshBuilder, a: f64, e: f64, z0: f64, z1: f64, inst| {
+                let (min, max) = corners(a, e, z0, z1);
                 b.aabb_box(min, max, inst);
             };
             for (a, e) in pieces {
@@ -1596,17 +1608,7 @@ fn build_walls(
                     z + cfg.wall_height,
                     di,
                 );
-                let (p0, p1) = if axis == 0 {
-                    (
-                        Point3::new(h.seg.lo, c - t * 0.5, z),
-                        Point3::new(h.seg.hi, c + t * 0.5, z + cfg.door_height),
-                    )
-                } else {
-                    (
-                        Point3::new(c - t * 0.5, h.seg.lo, z),
-                        Point3::new(c + t * 0.5, h.seg.hi, z + cfg.door_height),
-                    )
-                };
+                let (p0, p1) = corners(h.seg.lo, h.seg.hi, z, z + cfg.door_height);
                 b.include_in_bounds(di, p0);
                 b.include_in_bounds(di, p1);
             }

@@ -94,13 +94,19 @@ impl Bounds {
         }
     }
 
+    /// Extent along each axis.
+    fn extent(&self) -> [f32; 3] {
+        [0, 1, 2].map(|a| self.max[a] - self.min[a])
+    }
+
+    /// Centre of the box.
+    fn centre(&self) -> [f32; 3] {
+        [0, 1, 2].map(|a| 0.5 * (self.min[a] + self.max[a]))
+    }
+
     /// Half the surface area (enough for SAH ratios); 0 for empty boxes.
     fn half_area(&self) -> f32 {
-        let e = [
-            self.max[0] - self.min[0],
-            self.max[1] - self.min[1],
-            self.max[2] - self.min[2],
-        ];
+        let e = self.extent();
         if e.iter().any(|x| x.is_nan() || *x < 0.0) {
             return 0.0;
         }
@@ -191,14 +197,7 @@ impl PreparedRay {
         {
             return None;
         }
-        let abs = dir.map(f32::abs);
-        let kz = if abs[0] >= abs[1] && abs[0] >= abs[2] {
-            0
-        } else if abs[1] >= abs[2] {
-            1
-        } else {
-            2
-        };
+        let kz = largest_axis(dir.map(f32::abs));
         let kx = (kz + 1) % 3;
         let ky = (kz + 2) % 3;
         let sz = 1.0 / dir[kz];
@@ -335,10 +334,9 @@ impl Bvh {
                 }
                 bounds.grow_point(*v);
             }
-            let centroid = [0, 1, 2].map(|a| 0.5 * (bounds.min[a] + bounds.max[a]));
             refs.push(Prim {
                 bounds,
-                centroid,
+                centroid: bounds.centre(),
                 index: i as u32,
             });
         }
@@ -632,15 +630,7 @@ impl Bvh {
             // Pop the next node that the current best hit does not prune.
             loop {
                 if sp == 0 {
-                    return best.map(|i| {
-                        let tri = &self.triangles[i];
-                        BvhHit {
-                            t: best_t,
-                            triangle: tri.index,
-                            payload: tri.payload,
-                            slot: i as u32,
-                        }
-                    });
+                    return best.map(|i| self.hit_at(i, best_t));
                 }
                 sp -= 1;
                 let cand = stack[sp] as usize;
@@ -707,7 +697,7 @@ fn split_references(prims: Vec<Prim>, vertices: &[[f32; 3]], triangles: &[[u32; 
     let mut budget = 3 * prims.len() + 65_536;
     let mut out = Vec::with_capacity(prims.len());
     for p in prims {
-        let ext = [0, 1, 2].map(|a| f64::from(p.bounds.max[a] - p.bounds.min[a]));
+        let ext = p.bounds.extent().map(f64::from);
         let k = ext.map(|e| ((e / limit).ceil() as usize).clamp(1, 64));
         let cells = k[0] * k[1] * k[2];
         if cells <= 1 || cells > MAX_SPLIT_CELLS || cells > budget {
@@ -740,10 +730,9 @@ fn split_references(prims: Vec<Prim>, vertices: &[[f32; 3]], triangles: &[[u32; 
                         min: [0, 1, 2].map(|a| ((b.0[a] as f32) - eps).max(p.bounds.min[a])),
                         max: [0, 1, 2].map(|a| ((b.1[a] as f32) + eps).min(p.bounds.max[a])),
                     };
-                    let centroid = [0, 1, 2].map(|a| 0.5 * (bounds.min[a] + bounds.max[a]));
                     out.push(Prim {
                         bounds,
-                        centroid,
+                        centroid: bounds.centre(),
                         index: p.index,
                     });
                 }
@@ -849,11 +838,11 @@ fn build_range(
 }
 
 fn widest(b: &Bounds) -> usize {
-    let e = [
-        b.max[0] - b.min[0],
-        b.max[1] - b.min[1],
-        b.max[2] - b.min[2],
-    ];
+    largest_axis(b.extent())
+}
+
+/// Index of the largest of `e` (the first one on ties).
+fn largest_axis(e: [f32; 3]) -> usize {
     if e[0] >= e[1] && e[0] >= e[2] {
         0
     } else if e[1] >= e[2] {

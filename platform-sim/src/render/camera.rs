@@ -178,14 +178,6 @@ impl Frame {
     /// # Errors
     /// [`RenderError::Io`] when the file cannot be written.
     pub fn save_png(&self, path: &std::path::Path) -> Result<(), RenderError> {
-        let io = |e: String| RenderError::Io {
-            path: path.to_path_buf(),
-            message: e,
-        };
-        let file = std::fs::File::create(path).map_err(|e| io(e.to_string()))?;
-        let mut enc = png::Encoder::new(std::io::BufWriter::new(file), self.width, self.height);
-        enc.set_color(png::ColorType::Rgb);
-        enc.set_depth(png::BitDepth::Eight);
         let data: Vec<u8> = match &self.rgb {
             Some(rgb) => rgb.iter().flatten().copied().collect(),
             None => self
@@ -194,8 +186,10 @@ impl Frame {
                 .flat_map(|&i| if i == NO_INSTANCE { [0; 3] } else { palette(i) })
                 .collect(),
         };
-        let mut w = enc.write_header().map_err(|e| io(e.to_string()))?;
-        w.write_image_data(&data).map_err(|e| io(e.to_string()))
+        crate::write_rgb_png(path, self.width, self.height, &data).map_err(|e| RenderError::Io {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
     }
 }
 
