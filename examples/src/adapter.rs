@@ -282,6 +282,8 @@ pub struct SornavPolicy<F> {
     turns: i32,
     forward_m: f64,
     trace: EpisodeTrace,
+    /// `SORNAV_DEBUG` is set: log every dispatch to stderr.
+    debug: bool,
 }
 
 impl<F> std::fmt::Debug for SornavPolicy<F> {
@@ -293,6 +295,7 @@ impl<F> std::fmt::Debug for SornavPolicy<F> {
     }
 }
 
+/// To [-pi, pi), 0 if non-finite (not `wrap_angle`: (-pi, pi], keeps NaN).
 fn wrap(a: f64) -> f64 {
     let t = std::f64::consts::TAU;
     let r = (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI;
@@ -323,17 +326,13 @@ impl<F: AgentFactory> SornavPolicy<F> {
             turns: 12,
             forward_m: 0.25,
             trace: EpisodeTrace::default(),
+            debug: std::env::var_os("SORNAV_DEBUG").is_some(),
         }
     }
 
     /// The agent of the current episode.
     pub fn agent(&self) -> Option<&Agent> {
         self.agent.as_ref()
-    }
-
-    /// What was measured during the last episode.
-    pub fn trace(&self) -> &EpisodeTrace {
-        &self.trace
     }
 
     /// Takes the trace of the last episode.
@@ -483,6 +482,10 @@ impl<F: AgentFactory> SornavPolicy<F> {
         let grid = agent.frontier_map().grid();
         let heading = |k: i32| yaw + f64::from(k) * self.turn_rad;
         let cell = |p: &Point2<f64>| grid.cell_of(p).ok();
+        // The forward segment must stay on the agent's traversable map
+        // (the start cell may be inside the inflation margin).
+        let samples = (self.forward_m / (grid.resolution() / 2.0)).ceil().max(1.0) as usize;
+        let start_cell = cell(&here);
         let mut best: Option<(f64, i32)> = None;
         for k in -(self.turns / 2 - 1)..=(self.turns / 2) {
             let (s, c) = heading(k).sin_cos();
@@ -491,10 +494,6 @@ impl<F: AgentFactory> SornavPolicy<F> {
             if self.blocked.contains(&key) {
                 continue;
             }
-            // The forward segment must stay on the agent's traversable map
-            // (the start cell may be inside the inflation margin).
-            let samples = (self.forward_m / (grid.resolution() / 2.0)).ceil().max(1.0) as usize;
-            let start_cell = cell(&here);
             let free = (1..=samples).all(|i| {
                 let q = here + (end - here) * (i as f64 / samples as f64);
                 cell(&q).is_some_and(|cq| Some(cq) == start_cell || grid.is_traversable(cq))
@@ -522,7 +521,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
     }
 
     /// Bookkeeping of the previous action's effect (collisions).
-    fn after_last_action(&mut self, feet: &Point3<f64>, yaw: f64, step: usize) {
+    fn after_last_action(&mut self, feet: &Point3<f64>, step: usize) {
         let Some((before, before_yaw, action)) = self.last else {
             return;
         };
@@ -536,7 +535,6 @@ impl<F: AgentFactory> SornavPolicy<F> {
             }
             return;
         }
-        let _ = yaw;
         self.trace.collisions += 1;
         // Remember the blocked move so that it is not tried again.
         self.blocked
@@ -658,7 +656,7 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         }
         self.trace.trajectory.push(f32x3(&obs.position));
         let feet = self.to_local(&obs.position);
-        self.after_last_action(&feet, obs.yaw, step);
+        self.after_last_action(&feet, step);
         let action = self.decide(obs, &feet, step);
         self.last = Some((feet, obs.yaw, action));
         self.last_act_end = Some(Instant::now());
@@ -715,8 +713,8 @@ impl<F: AgentFactory> SornavPolicy<F> {
                     ));
                 }
                 // A re-dispatch with a new waypoint replaces the old one.
-                if std::env::var_os("SORNAV_DEBUG").is_some() {
-                    let last = self.agent.as_ref().map(|a| a.snapshot().last_outcome);
+                if self.debug {
+                    let last = self.agent.as_ref().map(Agent::last_outcome);
                     eprintln!(
                         "step {step} at ({:.2},{:.2}) yaw {:.0} dispatch {id:?} {} wp ({:.2},{:.2}) path {} last {:?}",
                         feet.x,

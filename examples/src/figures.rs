@@ -38,6 +38,8 @@ use std::path::Path;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
+use sornav_platform_sim::Outcome;
+
 use crate::summary::{DISTANCE_BINS, VariantSummary};
 
 const PALETTE: [RGBColor; 6] = [
@@ -53,34 +55,57 @@ fn colour(i: usize) -> RGBColor {
     PALETTE[i % PALETTE.len()]
 }
 
-type Chart<'a, 'b> =
+pub(crate) type Chart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
-/// A 900 x 480 chart with a caption: `categories` slots on x (slot `i` is
-/// `[i, i + 1)`, labelled at its centre) and `y` on the vertical axis.
+/// A 900 x 480 chart with a caption and its mesh: one slot per label on x
+/// (slot `i` is `[i, i + 1)`, `labels[i]` at its centre, no vertical grid
+/// lines) and `y`, described by `y_desc`, on the vertical axis.
 fn frame<'a, 'b>(
     root: &'a DrawingArea<BitMapBackend<'b>, plotters::coord::Shift>,
     caption: &str,
-    categories: usize,
+    labels: &[&str],
     y: std::ops::Range<f64>,
+    y_desc: &str,
 ) -> Result<Chart<'a, 'b>, FigureError> {
     root.fill(&WHITE).map_err(FigureError::draw)?;
-    ChartBuilder::on(root)
+    let mut chart = ChartBuilder::on(root)
         .caption(caption, ("sans-serif", 20))
         .margin(12)
         .x_label_area_size(36)
         .y_label_area_size(48)
-        .build_cartesian_2d(0.0..categories as f64, y)
-        .map_err(FigureError::draw)
+        .build_cartesian_2d(0.0..labels.len() as f64, y)
+        .map_err(FigureError::draw)?;
+    chart
+        .configure_mesh()
+        .disable_x_mesh()
+        .x_labels(2 * labels.len() + 1)
+        .x_label_formatter(&|x| {
+            if (x - x.floor() - 0.5).abs() > 1e-6 {
+                return String::new();
+            }
+            let i = x.floor() as usize;
+            labels.get(i).map_or(String::new(), |l| (*l).to_owned())
+        })
+        .y_desc(y_desc)
+        .label_style(("sans-serif", 13))
+        .draw()
+        .map_err(FigureError::draw)?;
+    Ok(chart)
 }
 
-/// The legend box, upper right.
-fn legend<'a, 'b: 'a>(chart: &mut Chart<'a, 'b>) -> Result<(), FigureError> {
+/// The legend box, upper right, on a white background of `opacity`, with
+/// `font_size` labels.
+pub(crate) fn legend<'a, 'b: 'a>(
+    chart: &mut Chart<'a, 'b>,
+    opacity: f64,
+    font_size: u32,
+) -> Result<(), FigureError> {
     chart
         .configure_series_labels()
-        .background_style(WHITE.mix(0.9))
+        .background_style(WHITE.mix(opacity))
         .border_style(BLACK)
-        .label_font(("sans-serif", 13))
+        .label_font(("sans-serif", font_size))
         .position(SeriesLabelPosition::UpperRight)
         .draw()
         .map_err(FigureError::draw)
@@ -104,27 +129,14 @@ pub fn metrics_bars(path: &Path, summaries: &[VariantSummary]) -> Result<(), Fig
     ];
     let root = BitMapBackend::new(path, (900, 480)).into_drawing_area();
     let n = summaries.len() as f64;
+    let labels: Vec<&str> = metrics.iter().map(|m| m.0).collect();
     let mut chart = frame(
         &root,
         "Success and path efficiency per variant",
-        metrics.len(),
+        &labels,
         0.0..100.0,
+        "%",
     )?;
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(2 * metrics.len() + 1)
-        .x_label_formatter(&|x| {
-            if (x - x.floor() - 0.5).abs() > 1e-6 {
-                return String::new();
-            }
-            let i = x.floor() as usize;
-            metrics.get(i).map_or(String::new(), |m| m.0.to_owned())
-        })
-        .y_desc("%")
-        .label_style(("sans-serif", 13))
-        .draw()
-        .map_err(FigureError::draw)?;
     let width = 0.8 / n;
     for (k, v) in summaries.iter().enumerate() {
         let c = colour(k);
@@ -137,7 +149,7 @@ pub fn metrics_bars(path: &Path, summaries: &[VariantSummary]) -> Result<(), Fig
             .label(format!("{} (n={})", v.variant, v.episodes))
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], c.filled()));
     }
-    legend(&mut chart)?;
+    legend(&mut chart, 0.9, 13)?;
     root.present().map_err(FigureError::draw)
 }
 
@@ -151,31 +163,15 @@ pub fn success_by_distance(path: &Path, summaries: &[VariantSummary]) -> Result<
         return Err(FigureError::Empty("success-by-distance chart"));
     }
     register_font();
-    let bins = DISTANCE_BINS.len();
+    let labels: Vec<&str> = DISTANCE_BINS.iter().map(|b| b.2).collect();
     let root = BitMapBackend::new(path, (900, 480)).into_drawing_area();
     let mut chart = frame(
         &root,
         "Same-floor success vs initial geodesic distance (Wilson 95 % CI)",
-        bins,
+        &labels,
         0.0..100.0,
+        "success rate %",
     )?;
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(2 * bins + 1)
-        .x_label_formatter(&|x| {
-            if (x - x.floor() - 0.5).abs() > 1e-6 {
-                return String::new();
-            }
-            let i = x.floor() as usize;
-            DISTANCE_BINS
-                .get(i)
-                .map_or(String::new(), |b| b.2.to_owned())
-        })
-        .y_desc("success rate %")
-        .label_style(("sans-serif", 13))
-        .draw()
-        .map_err(FigureError::draw)?;
     let n = summaries.len() as f64;
     for (k, v) in summaries.iter().enumerate() {
         let c = colour(k);
@@ -207,7 +203,7 @@ pub fn success_by_distance(path: &Path, summaries: &[VariantSummary]) -> Result<
             }))
             .map_err(FigureError::draw)?;
     }
-    legend(&mut chart)?;
+    legend(&mut chart, 0.9, 13)?;
     root.present().map_err(FigureError::draw)
 }
 
@@ -220,40 +216,25 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
         return Err(FigureError::Empty("failure chart"));
     }
     register_font();
-    const CLASSES: [(&str, &str); 6] = [
-        ("success", "success"),
-        ("cross_floor", "cross-floor"),
-        ("step_limit", "step limit"),
-        ("timeout", "timeout"),
-        ("false_stop", "false stop"),
-        ("other", "other"),
+    const CLASSES: [(Outcome, &str); 6] = [
+        (Outcome::Success, "success"),
+        (Outcome::CrossFloor, "cross-floor"),
+        (Outcome::StepLimit, "step limit"),
+        (Outcome::Timeout, "timeout"),
+        (Outcome::FalseStop, "false stop"),
+        (Outcome::Other, "other"),
     ];
     let root = BitMapBackend::new(path, (900, 480)).into_drawing_area();
+    let labels: Vec<&str> = summaries.iter().map(|v| v.variant.as_str()).collect();
     let mut chart = frame(
         &root,
         "Outcome composition per variant",
-        summaries.len(),
+        &labels,
         0.0..100.0,
+        "% of episodes",
     )?;
-    chart
-        .configure_mesh()
-        .disable_x_mesh()
-        .x_labels(2 * summaries.len() + 1)
-        .x_label_formatter(&|x| {
-            if (x - x.floor() - 0.5).abs() > 1e-6 {
-                return String::new();
-            }
-            let i = x.floor() as usize;
-            summaries
-                .get(i)
-                .map_or(String::new(), |v| v.variant.clone())
-        })
-        .y_desc("% of episodes")
-        .label_style(("sans-serif", 13))
-        .draw()
-        .map_err(FigureError::draw)?;
     for (c, (key, label)) in CLASSES.iter().enumerate() {
-        let colour = if *key == "success" {
+        let colour = if *key == Outcome::Success {
             RGBColor(44, 160, 44)
         } else {
             colour(c + 2)
@@ -263,9 +244,9 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
                 let total = v.episodes.max(1) as f64;
                 let below: u64 = CLASSES[..c]
                     .iter()
-                    .map(|(k2, _)| v.outcomes.get(*k2).copied().unwrap_or(0))
+                    .map(|(k2, _)| v.outcomes.get(k2.name()).copied().unwrap_or(0))
                     .sum();
-                let mine = v.outcomes.get(*key).copied().unwrap_or(0);
+                let mine = v.outcomes.get(key.name()).copied().unwrap_or(0);
                 let (y0, y1) = (
                     100.0 * below as f64 / total,
                     100.0 * (below + mine) as f64 / total,
@@ -279,6 +260,6 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
             .label(*label)
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], colour.filled()));
     }
-    legend(&mut chart)?;
+    legend(&mut chart, 0.9, 13)?;
     root.present().map_err(FigureError::draw)
 }

@@ -370,6 +370,23 @@ pub fn read_records(path: &Path) -> Result<Vec<EpisodeRecord>, HarnessError> {
     Ok(out)
 }
 
+/// Reads `dir/run.json`.
+fn read_run_file(dir: &Path) -> Result<EvalConfig, HarnessError> {
+    let path = dir.join("run.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
+    serde_json::from_str(&text).map_err(|e| HarnessError::Malformed {
+        path,
+        line: 0,
+        message: e.to_string(),
+    })
+}
+
+/// Whether two configurations describe the same evaluation. Compared
+/// through JSON: floating-point fields round-trip exactly.
+fn same_run(a: &EvalConfig, b: &EvalConfig) -> bool {
+    serde_json::to_value(a).ok() == serde_json::to_value(b).ok()
+}
+
 /// Checks or writes `run.json`.
 fn check_run_file(dir: &Path, config: &EvalConfig, fresh: bool) -> Result<(), HarnessError> {
     let path = dir.join("run.json");
@@ -386,15 +403,7 @@ fn check_run_file(dir: &Path, config: &EvalConfig, fresh: bool) -> Result<(), Ha
         }
     }
     if path.exists() {
-        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
-        let old: EvalConfig = serde_json::from_str(&text).map_err(|e| HarnessError::Malformed {
-            path: path.clone(),
-            line: 0,
-            message: e.to_string(),
-        })?;
-        // Compare through JSON: floating-point fields round-trip exactly.
-        let same = serde_json::to_value(&old).ok() == serde_json::to_value(config).ok();
-        if !same {
+        if !same_run(&read_run_file(dir)?, config) {
             return Err(HarnessError::DifferentRun(dir.to_path_buf()));
         }
         return Ok(());
@@ -409,18 +418,7 @@ fn llm_transport(settings: &LlmSettings) -> Result<Arc<dyn Transport>, HarnessEr
         let t = ReplayTransport::open(replay).map_err(|e| io_err(replay, e))?;
         return Ok(Arc::new(t));
     }
-    let c = &settings.config;
-    let api_key = c
-        .api_key_env
-        .as_deref()
-        .and_then(|v| std::env::var(v).ok())
-        .filter(|k| !k.is_empty());
-    let http = HttpTransport::new(
-        &c.base_url,
-        api_key,
-        std::time::Duration::from_secs_f64(c.timeout_s),
-        c.use_env_proxy,
-    );
+    let http = HttpTransport::from_config(&settings.config).map_err(AgentError::from)?;
     match &settings.record {
         Some(path) => Ok(Arc::new(
             RecordingTransport::new(http, path).map_err(|e| io_err(path, e))?,
@@ -485,7 +483,7 @@ fn topdown(
             record.result.scene_id,
             record.result.episode_id,
             record.result.object_category,
-            crate::summary::outcome_name(record.result.outcome),
+            record.result.outcome.name(),
             record.result.actions
         ),
         occupancy,
@@ -675,21 +673,12 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             let variant = &config.variants[w.variant];
             let mut run_config = config.run.clone();
             run_config.noise_seed = config.seed;
-            let (result, trace, snapshot) = match &factories[w.variant] {
-                None => {
-                    let mut oracle = Oracle::new();
-                    (
-                        run_episode(&scene.sim, episode, &mut oracle, &run_config),
-                        None,
-                        None,
-                    )
-                }
-                Some(f) => {
-                    let mut policy = SornavPolicy::new(f, config.adapter.clone());
-                    let r = run_episode(&scene.sim, episode, &mut policy, &run_config);
-                    let snapshot = policy.agent().map(sornav::Agent::snapshot);
-                    (r, Some(policy.take_trace()), snapshot)
-                }
+            let mut policy = factories[w.variant]
+                .as_ref()
+                .map(|f| SornavPolicy::new(f, config.adapter.clone()));
+            let result = match policy.as_mut() {
+                None => run_episode(&scene.sim, episode, &mut Oracle::new(), &run_config),
+                Some(p) => run_episode(&scene.sim, episode, p, &run_config),
             };
             let result = match result {
                 Ok(r) => r,
@@ -699,15 +688,27 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
                     return;
                 }
             };
-            let record = EpisodeRecord::new(variant, result, trace.clone());
-            let relocated = !record.relocations.is_empty()
+            let trace = policy.as_mut().map(SornavPolicy::take_trace);
+            // Every relocating episode counts toward the `config.maps`
+            // relocation maps, even one that gets a map anyway.
+            let relocated = trace.as_ref().is_some_and(|t| !t.relocations.is_empty())
                 && relocation_maps.fetch_add(1, std::sync::atomic::Ordering::Relaxed) < config.maps;
-            if map_episodes.contains(&(w.scene, w.episode)) || relocated {
+            let want_map = map_episodes.contains(&(w.scene, w.episode)) || relocated;
+            // The agent's end state and the full trace only for a map.
+            let snapshot = policy
+                .as_ref()
+                .and_then(SornavPolicy::agent)
+                .filter(|_| want_map)
+                .map(sornav::Agent::snapshot);
+            drop(policy);
+            let map_trace = if want_map { trace.clone() } else { None };
+            let record = EpisodeRecord::new(variant, result, trace);
+            if want_map {
                 let map = topdown(
                     &scene.sim,
                     episode,
                     &record,
-                    &trace.unwrap_or_default(),
+                    &map_trace.unwrap_or_default(),
                     snapshot,
                 );
                 let path = maps_dir.join(format!(
@@ -782,15 +783,9 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<PathBuf, HarnessError> {
     let mut records = Vec::new();
     let mut seen = HashSet::new();
     for dir in shards {
-        let path = dir.join("run.json");
-        let text = std::fs::read_to_string(&path).map_err(|e| io_err(&path, e))?;
-        let c: EvalConfig = serde_json::from_str(&text).map_err(|e| HarnessError::Malformed {
-            path: path.clone(),
-            line: 0,
-            message: e.to_string(),
-        })?;
+        let c = read_run_file(dir)?;
         match &config {
-            Some(first) if serde_json::to_value(first).ok() != serde_json::to_value(&c).ok() => {
+            Some(first) if !same_run(first, &c) => {
                 return Err(HarnessError::DifferentRun(dir.clone()));
             }
             Some(_) => {}

@@ -275,7 +275,7 @@ fn markdown(
                 r.result.episode_id,
                 r.result.object_category,
                 r.relocations.len(),
-                crate::summary::outcome_name(r.result.outcome),
+                r.result.outcome.name(),
                 verdict,
                 reason
             );

@@ -5,7 +5,7 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
-use sornav_platform_sim::Outcome;
+use sornav_platform_sim::{EpisodeResult, Summary};
 
 use crate::histogram::Histogram;
 use crate::record::EpisodeRecord;
@@ -122,18 +122,6 @@ pub struct VariantSummary {
     pub outcomes: BTreeMap<String, u64>,
 }
 
-/// The name of an outcome class.
-pub fn outcome_name(o: Outcome) -> &'static str {
-    match o {
-        Outcome::Success => "success",
-        Outcome::CrossFloor => "cross_floor",
-        Outcome::StepLimit => "step_limit",
-        Outcome::Timeout => "timeout",
-        Outcome::FalseStop => "false_stop",
-        Outcome::Other => "other",
-    }
-}
-
 fn mean(values: impl Iterator<Item = f64>) -> f64 {
     let (s, n) = values.fold((0.0, 0u64), |(s, n), v| (s + v, n + 1));
     if n == 0 { 0.0 } else { s / n as f64 }
@@ -148,6 +136,12 @@ impl VariantSummary {
             |f: &dyn Fn(&EpisodeRecord) -> bool| records.iter().filter(|r| f(r)).count() as u64;
         let rate = |k: u64| k as f64 / nf;
         let successes = count(&|r| r.result.success);
+        // The simulator's own means. Bit-identical to left-to-right sums
+        // from +0.0 divided by the count: its sums add in the same order and
+        // start from -0.0, which differs only when every term is -0.0, and no
+        // metric of `run_episode` is ever -0.0.
+        let results: Vec<EpisodeResult> = records.iter().map(|r| r.result.clone()).collect();
+        let sim = Summary::of(&results);
         let mut decision = Histogram::new();
         let mut frame = Histogram::new();
         for r in records {
@@ -157,7 +151,7 @@ impl VariantSummary {
         let mut outcomes = BTreeMap::new();
         for r in records {
             *outcomes
-                .entry(outcome_name(r.result.outcome).to_owned())
+                .entry(r.result.outcome.name().to_owned())
                 .or_insert(0) += 1;
         }
         let same_floor: Vec<&&EpisodeRecord> =
@@ -186,19 +180,19 @@ impl VariantSummary {
         Self {
             variant: variant.to_owned(),
             episodes: n,
-            success_rate: rate(successes),
+            success_rate: sim.success_rate,
             success_rate_ci95: wilson(successes, n, 1.96),
-            spl: mean(records.iter().map(|r| r.result.spl)),
-            soft_spl: mean(records.iter().map(|r| r.result.soft_spl)),
-            success_rate_1m: rate(count(&|r| r.result.success_1m)),
-            dtg_m: mean(records.iter().filter_map(|r| r.result.dtg_m)),
-            step_limit_rate: rate(count(&|r| r.result.outcome == Outcome::StepLimit)),
-            timeout_rate: rate(count(&|r| r.result.outcome == Outcome::Timeout)),
-            false_stop_rate: rate(count(&|r| r.result.outcome == Outcome::FalseStop)),
-            cross_floor_rate: rate(count(&|r| r.result.outcome == Outcome::CrossFloor)),
-            other_rate: rate(count(&|r| r.result.outcome == Outcome::Other)),
-            mean_actions: mean(records.iter().map(|r| r.result.actions as f64)),
-            mean_collisions: mean(records.iter().map(|r| r.result.collisions as f64)),
+            spl: sim.spl,
+            soft_spl: sim.soft_spl,
+            success_rate_1m: sim.success_rate_1m,
+            dtg_m: sim.dtg_m,
+            step_limit_rate: sim.step_limit_rate,
+            timeout_rate: sim.timeout_rate,
+            false_stop_rate: sim.false_stop_rate,
+            cross_floor_rate: sim.cross_floor_rate,
+            other_rate: sim.other_rate,
+            mean_actions: sim.mean_actions,
+            mean_collisions: sim.mean_collisions,
             relocation_rate: rate(count(&|r| !r.relocations.is_empty())),
             mean_relocations: mean(records.iter().map(|r| r.relocations.len() as f64)),
             exhausted_rate: rate(count(&|r| r.agent_end == "exhausted")),

@@ -8,7 +8,7 @@ use plotters::prelude::*;
 use serde::{Deserialize, Serialize};
 use sornav::OccupancyRaster;
 
-use crate::figures::{FigureError, register_font};
+use crate::figures::{FigureError, legend, register_font};
 
 /// Everything drawn on one top-down map (world x/y, metres).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
@@ -243,14 +243,7 @@ impl TopDownMap {
                 .label(if self.success { "end (success)" } else { "end" })
                 .legend(move |(x, y)| Circle::new((x + 4, y), 4, colour.filled()));
         }
-        chart
-            .configure_series_labels()
-            .background_style(WHITE.mix(0.85))
-            .border_style(BLACK)
-            .label_font(("sans-serif", 11))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(FigureError::draw)?;
+        legend(&mut chart, 0.85, 11)?;
         root.present().map_err(FigureError::draw)?;
         Ok(())
     }

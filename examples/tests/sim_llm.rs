@@ -2,41 +2,17 @@
 //! OpenAI-compatible server (std `TcpListener` on 127.0.0.1), recorded, and
 //! re-run offline from the recording with identical results.
 
-use std::io::{BufRead, BufReader, Read, Write};
-use std::net::{TcpListener, TcpStream};
 use std::path::PathBuf;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Duration;
 
 use serde_json::{Value, json};
 use sornav::supervisor::LlmConfig;
-use sornav_examples::adapter::AdapterConfig;
-use sornav_examples::harness::{self, EpisodeSource, EvalConfig, LlmSettings, RunOptions};
-use sornav_examples::scenes::SceneSource;
-use sornav_platform_sim::{CameraConfig, RunConfig};
+use sornav_examples::harness::{self, EvalConfig, LlmSettings};
+use sornav_test_support::chat_server;
 
-fn read_body(stream: &TcpStream) -> Option<Value> {
-    let mut reader = BufReader::new(stream.try_clone().ok()?);
-    let mut line = String::new();
-    reader.read_line(&mut line).ok()?;
-    let mut length = 0usize;
-    loop {
-        line.clear();
-        reader.read_line(&mut line).ok()?;
-        let l = line.trim_end();
-        if l.is_empty() {
-            break;
-        }
-        if let Some((k, v)) = l.split_once(':')
-            && k.eq_ignore_ascii_case("content-length")
-        {
-            length = v.trim().parse().ok()?;
-        }
-    }
-    let mut body = vec![0; length];
-    reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
-}
+mod common;
 
 /// The model: relocate to the first candidate offered, else keep exploring.
 fn answer(request: &Value) -> String {
@@ -54,72 +30,30 @@ fn answer(request: &Value) -> String {
         Some(id) => json!({"action": "relocate_cluster", "cluster_id": id, "reason": "test model"}),
         None => json!({"action": "continue_explore"}),
     };
-    json!({
-        "id": "x", "object": "chat.completion", "model": "fake",
-        "choices": [{"index": 0, "finish_reason": "stop",
-                     "message": {"role": "assistant", "content": content.to_string()}}]
-    })
-    .to_string()
+    chat_server::completion(&content.to_string())
 }
 
 fn serve() -> (String, Arc<AtomicUsize>) {
-    let listener = TcpListener::bind("127.0.0.1:0").expect("bind loopback");
-    let url = format!("http://{}/v1", listener.local_addr().unwrap());
-    let hits = Arc::new(AtomicUsize::new(0));
-    let h = Arc::clone(&hits);
-    std::thread::spawn(move || {
-        for stream in listener.incoming() {
-            let Ok(mut stream) = stream else { continue };
-            let Some(body) = read_body(&stream) else {
-                continue;
-            };
-            h.fetch_add(1, Ordering::SeqCst);
-            let reply = answer(&body);
-            let _ = write!(
-                stream,
-                "HTTP/1.1 200 OK\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{reply}",
-                reply.len()
-            );
-        }
-    });
-    (url, hits)
+    let server = chat_server::serve(Arc::new(|body| (200, answer(body), Duration::ZERO)));
+    (server.base_url, server.hits)
 }
 
 fn eval(llm: LlmSettings) -> EvalConfig {
-    let agent = sornav_examples::adapter::sim_agent_config();
     EvalConfig {
-        scenes: vec![SceneSource::Procedural {
-            seed: 52,
-            shuffled: false,
-        }],
-        models: None,
-        episodes: EpisodeSource::Generate {
-            per_category: 1,
-            per_scene: Some(3),
-        },
-        categories: vec!["toilet".into(), "bed".into(), "tv_monitor".into()],
-        variants: vec!["sornav".into()],
         seed: 1,
-        camera: CameraConfig {
-            width: 96,
-            height: 72,
-            ..CameraConfig::default()
-        },
-        run: RunConfig {
-            max_actions: 120,
-            ..RunConfig::default()
-        },
-        adapter: AdapterConfig::default(),
-        agent,
-        llm: Some(llm),
-        maps: 0,
+        ..common::small_eval(
+            &[52],
+            3,
+            &["toilet", "bed", "tv_monitor"],
+            &["sornav"],
+            120,
+            Some(llm),
+        )
     }
 }
 
 fn dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sornav-llm-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::temp_dir("llm", tag)
 }
 
 #[test]
@@ -139,13 +73,7 @@ fn llm_policy_records_and_replays_bit_for_bit() {
         replay: None,
     });
     let out_live = dir("live");
-    let options = |out: &PathBuf| RunOptions {
-        out: out.clone(),
-        jobs: 1,
-        shard: None,
-        fresh: true,
-        progress: false,
-    };
+    let options = |out: &PathBuf| common::options(out, 1, None, true);
     harness::run(&live, &options(&out_live)).unwrap();
     let asked = hits.load(Ordering::SeqCst);
     assert!(asked > 0, "the policy asked the model");

@@ -5,13 +5,14 @@
 use std::path::{Path, PathBuf};
 
 use sornav_examples::adapter::{AdapterConfig, ConfigFactory, SornavPolicy};
-use sornav_examples::harness::{self, EpisodeSource, EvalConfig, RunOptions};
-use sornav_examples::scenes::SceneSource;
+use sornav_examples::harness::{self, EvalConfig, RunOptions};
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
 use sornav_platform_sim::procedural::ProceduralConfig;
 use sornav_platform_sim::{
     CameraConfig, Outcome, RunConfig, Scene, SimConfig, Simulator, run_episode,
 };
+
+mod common;
 
 fn small_camera() -> CameraConfig {
     CameraConfig {
@@ -97,50 +98,25 @@ fn full_agent_succeeds_in_a_small_procedural_house() {
 
 fn tiny_eval(variants: &[&str]) -> EvalConfig {
     EvalConfig {
-        scenes: (0..2)
-            .map(|i| SceneSource::Procedural {
-                seed: 40 + i,
-                shuffled: false,
-            })
-            .collect(),
-        models: None,
-        episodes: EpisodeSource::Generate {
-            per_category: 1,
-            per_scene: Some(2),
-        },
-        categories: vec!["bed".into(), "chair".into(), "toilet".into()],
-        variants: variants.iter().map(|v| (*v).to_owned()).collect(),
         seed: 3,
-        camera: CameraConfig {
-            width: 96,
-            height: 72,
-            ..CameraConfig::default()
-        },
-        run: RunConfig {
-            max_actions: 150,
-            ..RunConfig::default()
-        },
-        adapter: AdapterConfig::default(),
-        agent: sornav_examples::adapter::sim_agent_config(),
-        llm: None,
         maps: 1,
+        ..common::small_eval(
+            &[40, 41],
+            2,
+            &["bed", "chair", "toilet"],
+            variants,
+            150,
+            None,
+        )
     }
 }
 
 fn temp_dir(tag: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("sornav-sim-test-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+    common::temp_dir("sim-test", tag)
 }
 
 fn options(out: &Path, shard: Option<(usize, usize)>) -> RunOptions {
-    RunOptions {
-        out: out.to_path_buf(),
-        jobs: 2,
-        shard,
-        fresh: false,
-        progress: false,
-    }
+    common::options(out, 2, shard, false)
 }
 
 /// Deterministic part of a record (no timings).

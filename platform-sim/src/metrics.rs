@@ -34,6 +34,21 @@ pub enum Outcome {
     Other,
 }
 
+impl Outcome {
+    /// The serialised name (`success`, `cross_floor`, `step_limit`,
+    /// `timeout`, `false_stop`, `other`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Success => "success",
+            Self::CrossFloor => "cross_floor",
+            Self::StepLimit => "step_limit",
+            Self::Timeout => "timeout",
+            Self::FalseStop => "false_stop",
+            Self::Other => "other",
+        }
+    }
+}
+
 /// What happened, as the loop saw it (input of [`classify`]).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Termination {
@@ -229,6 +244,23 @@ mod tests {
             }
             let soft = soft_spl(extra, l + 1.0, l, p);
             prop_assert!((0.0..=1.0).contains(&soft));
+        }
+    }
+
+    #[test]
+    fn outcome_name_is_the_serde_name() {
+        for o in [
+            Outcome::Success,
+            Outcome::CrossFloor,
+            Outcome::StepLimit,
+            Outcome::Timeout,
+            Outcome::FalseStop,
+            Outcome::Other,
+        ] {
+            assert_eq!(
+                serde_json::to_value(o).unwrap(),
+                serde_json::Value::from(o.name())
+            );
         }
     }
 

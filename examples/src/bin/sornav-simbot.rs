@@ -131,8 +131,14 @@ fn odometry(world: &World) -> Odometry {
     }
 }
 
-/// The three clouds of one scan.
-fn clouds(world: &World, seed: u64) -> Result<(PointCloud2, PointCloud2, PointCloud2), String> {
+/// The clouds of one scan: the semantic cloud, and the registered and
+/// terrain clouds when asked for (they are published at lower rates).
+fn clouds(
+    world: &World,
+    seed: u64,
+    registered: bool,
+    terrain: bool,
+) -> Result<(PointCloud2, Option<PointCloud2>, Option<PointCloud2>), String> {
     let returns = world.scan(seed);
     let e = |e: sornav_platform_scout::pointcloud::CloudError| e.to_string();
     let sem_rows: Vec<[f64; 4]> = returns
@@ -140,22 +146,30 @@ fn clouds(world: &World, seed: u64) -> Result<(PointCloud2, PointCloud2, PointCl
         .map(|r| [r.p[0], r.p[1], r.p[2], f64::from(r.label)])
         .collect();
     let semantic = encode_xyzl(header("map"), &sem_rows).map_err(e)?;
-    let reg_rows: Vec<[f64; 4]> = returns
-        .iter()
-        .map(|r| [r.p[0], r.p[1], r.p[2], 0.0])
-        .collect();
-    let registered = encode_xyzi(header("map"), &reg_rows).map_err(e)?;
-    // Terrain: returns within 5 m, one per 0.1 m voxel, intensity = height
-    // above the floor under the robot.
-    let floor = world.position.z;
-    let mut seen = std::collections::HashSet::new();
-    let ter_rows: Vec<[f64; 4]> = returns
-        .iter()
-        .filter(|r| (r.p[0] - world.position.x).hypot(r.p[1] - world.position.y) <= 5.0)
-        .filter(|r| seen.insert(r.p.map(|c| (c * 10.0).floor() as i64)))
-        .map(|r| [r.p[0], r.p[1], r.p[2], r.p[2] - floor])
-        .collect();
-    let terrain = encode_xyzi(header("map"), &ter_rows).map_err(e)?;
+    let registered = if registered {
+        let reg_rows: Vec<[f64; 4]> = returns
+            .iter()
+            .map(|r| [r.p[0], r.p[1], r.p[2], 0.0])
+            .collect();
+        Some(encode_xyzi(header("map"), &reg_rows).map_err(e)?)
+    } else {
+        None
+    };
+    let terrain = if terrain {
+        // Returns within 5 m, one per 0.1 m voxel, intensity = height above
+        // the floor under the robot.
+        let floor = world.position.z;
+        let mut seen = std::collections::HashSet::new();
+        let ter_rows: Vec<[f64; 4]> = returns
+            .iter()
+            .filter(|r| (r.p[0] - world.position.x).hypot(r.p[1] - world.position.y) <= 5.0)
+            .filter(|r| seen.insert(r.p.map(|c| (c * 10.0).floor() as i64)))
+            .map(|r| [r.p[0], r.p[1], r.p[2], r.p[2] - floor])
+            .collect();
+        Some(encode_xyzi(header("map"), &ter_rows).map_err(e)?)
+    } else {
+        None
+    };
     Ok((semantic, registered, terrain))
 }
 
@@ -190,7 +204,7 @@ fn run() -> Result<(), String> {
     }
     world.speed = args.speed;
     if args.list_objects {
-        let labels = world::instance_labels(world.scene(), &vocabulary);
+        let labels = world.labels();
         let objects: Vec<serde_json::Value> = world
             .scene()
             .objects()
@@ -276,12 +290,17 @@ fn run() -> Result<(), String> {
             .map_err(|e| format!("{e:?}"))?;
         if last_scan.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0 / args.scan_hz) {
             last_scan = Some(Instant::now());
-            let (semantic, registered, terrain) = clouds(&world, scans)?;
+            let (semantic, registered, terrain) = clouds(
+                &world,
+                scans,
+                scans.is_multiple_of(2),
+                scans.is_multiple_of(4),
+            )?;
             sem_pub.publish(semantic).map_err(|e| format!("{e:?}"))?;
-            if scans.is_multiple_of(2) {
+            if let Some(registered) = registered {
                 reg_pub.publish(registered).map_err(|e| format!("{e:?}"))?;
             }
-            if scans.is_multiple_of(4) {
+            if let Some(terrain) = terrain {
                 ter_pub.publish(terrain).map_err(|e| format!("{e:?}"))?;
             }
             scans += 1;

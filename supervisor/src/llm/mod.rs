@@ -289,17 +289,7 @@ impl LlmPolicy {
     /// [`SupervisorError::InvalidConfig`] for an invalid configuration.
     pub fn http(config: LlmConfig) -> Result<Self, SupervisorError> {
         config.validate()?;
-        let api_key = config
-            .api_key_env
-            .as_deref()
-            .and_then(|var| std::env::var(var).ok())
-            .filter(|k| !k.is_empty());
-        let transport = HttpTransport::new(
-            &config.base_url,
-            api_key,
-            Duration::from_secs_f64(config.timeout_s),
-            config.use_env_proxy,
-        );
+        let transport = HttpTransport::from_config(&config)?;
         Self::with_transport(config, Arc::new(transport))
     }
 

@@ -10,6 +10,7 @@ use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
+use super::LlmConfig;
 use crate::error::SupervisorError;
 
 /// An HTTP reply: status and body text.
@@ -80,6 +81,33 @@ impl HttpTransport {
             url: format!("{}/chat/completions", base_url.trim_end_matches('/')),
             api_key,
         }
+    }
+
+    /// A client for `config.base_url` with its timeout and proxy setting;
+    /// the API key is read from the variable `config.api_key_env` (none when
+    /// unset, unset in the environment, or empty).
+    ///
+    /// Only the transport settings are checked here;
+    /// [`LlmConfig::validate`] checks the rest.
+    ///
+    /// # Errors
+    /// [`SupervisorError::InvalidConfig`] when `config.timeout_s` is not a
+    /// representable duration (negative, non-finite or too large).
+    pub fn from_config(config: &LlmConfig) -> Result<Self, SupervisorError> {
+        let timeout = Duration::try_from_secs_f64(config.timeout_s).map_err(|e| {
+            SupervisorError::InvalidConfig(format!("timeout_s {}: {e}", config.timeout_s))
+        })?;
+        let api_key = config
+            .api_key_env
+            .as_deref()
+            .and_then(|var| std::env::var(var).ok())
+            .filter(|k| !k.is_empty());
+        Ok(Self::new(
+            &config.base_url,
+            api_key,
+            timeout,
+            config.use_env_proxy,
+        ))
     }
 }
 

@@ -6,6 +6,7 @@
 use nalgebra::Point3;
 use sornav::LabelEntry;
 use sornav::supervisor::normalize_label;
+use sornav_platform_sim::agent::wrap_angle;
 use sornav_platform_sim::render::{Camera, CameraConfig, CameraPose, NO_INSTANCE};
 use sornav_platform_sim::{InstanceKind, NavMesh, NavMeshConfig, Scene};
 
@@ -28,7 +29,7 @@ pub struct Return {
 /// The segmentation's label of every instance of `scene`: structure maps to
 /// wall / floor / ceiling, objects to the robot vocabulary entry with the
 /// same normalised category, anything else to [`UNLABELLED`].
-pub fn instance_labels(scene: &Scene, vocabulary: &[LabelEntry]) -> Vec<u16> {
+fn instance_labels(scene: &Scene, vocabulary: &[LabelEntry]) -> Vec<u16> {
     let named: Vec<(String, u16)> = vocabulary
         .iter()
         .filter(|e| !e.ignored)
@@ -68,13 +69,6 @@ pub struct World {
     pub yaw_rate: f64,
     /// Distance travelled (m).
     pub odometer: f64,
-}
-
-/// Wraps an angle to (-pi, pi].
-fn wrap(a: f64) -> f64 {
-    let t = std::f64::consts::TAU;
-    let w = a.rem_euclid(t);
-    if w > std::f64::consts::PI { w - t } else { w }
 }
 
 impl World {
@@ -150,6 +144,12 @@ impl World {
         &self.scene
     }
 
+    /// The segmentation's label of every instance of the scene (see
+    /// `instance_labels`), indexed by instance id.
+    pub fn labels(&self) -> &[u16] {
+        &self.labels
+    }
+
     /// The camera height above the feet.
     pub fn sensor_height(&self) -> f64 {
         self.camera.config().mount_height
@@ -196,13 +196,12 @@ impl World {
                 continue;
             }
             let want = d.y.atan2(d.x);
-            let err = wrap(want - self.yaw);
+            let err = wrap_angle(want - self.yaw);
             let max_turn = self.yaw_rate * dt;
+            self.yaw = wrap_angle(self.yaw + err.clamp(-max_turn, max_turn));
             if err.abs() > 30f64.to_radians() {
-                self.yaw = wrap(self.yaw + err.clamp(-max_turn, max_turn));
                 return;
             }
-            self.yaw = wrap(self.yaw + err.clamp(-max_turn, max_turn));
             let step = budget.min(dist);
             let t = step / dist;
             self.position += d * t;
@@ -221,7 +220,7 @@ impl World {
         let config = self.camera.config();
         let mut out = Vec::new();
         for k in 0u32..4 {
-            let yaw = wrap(self.yaw + f64::from(k) * std::f64::consts::FRAC_PI_2);
+            let yaw = wrap_angle(self.yaw + f64::from(k) * std::f64::consts::FRAC_PI_2);
             let pose: CameraPose = self.camera.pose_at(&self.position, yaw, 0.0);
             let frame = self.camera.render(&pose, seed.wrapping_add(u64::from(k)));
             for v in 0..frame.height {

@@ -1,0 +1,72 @@
+//! Helpers shared by the evaluation-harness tests.
+
+use std::path::{Path, PathBuf};
+
+use sornav_examples::adapter::{AdapterConfig, sim_agent_config};
+use sornav_examples::harness::{EpisodeSource, EvalConfig, LlmSettings, RunOptions};
+use sornav_examples::scenes::SceneSource;
+use sornav_platform_sim::{CameraConfig, RunConfig};
+
+/// A small evaluation of `variants` (simulator agent configuration, 96 x 72
+/// camera) on the procedural houses `scene_seeds`: one episode per target
+/// category of `categories`, at most `per_scene` per house, `max_actions`
+/// actions each. Evaluation seed 0 and no maps: callers set `seed` and
+/// `maps` by struct update.
+pub fn small_eval(
+    scene_seeds: &[u64],
+    per_scene: usize,
+    categories: &[&str],
+    variants: &[&str],
+    max_actions: usize,
+    llm: Option<LlmSettings>,
+) -> EvalConfig {
+    EvalConfig {
+        scenes: scene_seeds
+            .iter()
+            .map(|&seed| SceneSource::Procedural {
+                seed,
+                shuffled: false,
+            })
+            .collect(),
+        models: None,
+        episodes: EpisodeSource::Generate {
+            per_category: 1,
+            per_scene: Some(per_scene),
+        },
+        categories: categories.iter().map(|c| (*c).to_owned()).collect(),
+        variants: variants.iter().map(|v| (*v).to_owned()).collect(),
+        seed: 0,
+        camera: CameraConfig {
+            width: 96,
+            height: 72,
+            ..CameraConfig::default()
+        },
+        run: RunConfig {
+            max_actions,
+            ..RunConfig::default()
+        },
+        adapter: AdapterConfig::default(),
+        agent: sim_agent_config(),
+        llm,
+        maps: 0,
+    }
+}
+
+/// A fresh (removed if present) path `sornav-<prefix>-<tag>-<pid>` in the
+/// temporary directory.
+pub fn temp_dir(prefix: &str, tag: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("sornav-{prefix}-{tag}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+/// Run options without a progress bar.
+pub fn options(out: &Path, jobs: usize, shard: Option<(usize, usize)>, fresh: bool) -> RunOptions {
+    RunOptions {
+        out: out.to_path_buf(),
+        jobs,
+        shard,
+        fresh,
+        progress: false,
+    }
+}
