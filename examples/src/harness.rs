@@ -370,6 +370,42 @@ pub fn read_records(path: &Path) -> Result<Vec<EpisodeRecord>, HarnessError> {
     Ok(out)
 }
 
+/// Makes `episodes.jsonl` end at a line boundary before records are
+/// appended to it: a truncated last line (an interrupted write, which
+/// [`read_records`] drops) is cut off, and a complete last record that only
+/// lacks its newline gets one. Otherwise the first appended record would be
+/// glued to that line and the file would no longer read.
+fn repair_tail(path: &Path) -> Result<(), HarnessError> {
+    let bytes = match std::fs::read(path) {
+        Ok(b) => b,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(io_err(path, e)),
+    };
+    let start = bytes.iter().rposition(|&b| b == b'\n').map_or(0, |p| p + 1);
+    let tail = &bytes[start..];
+    if tail.is_empty() {
+        return Ok(());
+    }
+    let complete = serde_json::from_slice::<EpisodeRecord>(tail).is_ok();
+    if !complete {
+        tracing::warn!(
+            "{}: cutting off a truncated last line before appending",
+            path.display()
+        );
+    }
+    let mut file = OpenOptions::new()
+        .append(complete)
+        .write(true)
+        .open(path)
+        .map_err(|e| io_err(path, e))?;
+    let result = if complete {
+        file.write_all(b"\n")
+    } else {
+        file.set_len(u64::try_from(start).unwrap_or(u64::MAX))
+    };
+    result.map_err(|e| io_err(path, e))
+}
+
 /// Reads `dir/run.json`.
 fn read_run_file(dir: &Path) -> Result<EvalConfig, HarnessError> {
     let path = dir.join("run.json");
@@ -642,6 +678,7 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
 
     let maps_dir = options.out.join("maps");
     std::fs::create_dir_all(&maps_dir).map_err(|e| io_err(&maps_dir, e))?;
+    repair_tail(&jsonl)?;
     let out_file = OpenOptions::new()
         .create(true)
         .append(true)

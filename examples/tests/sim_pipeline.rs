@@ -253,6 +253,19 @@ fn episode_log_damage_is_handled() {
     let n = text.lines().count();
     std::fs::write(&path, format!("{text}{{\"variant\":\"ora")).unwrap();
     assert_eq!(harness::read_records(&path).unwrap().len(), n);
+    // Resuming after an interrupted write: the partial line is cut off
+    // before new records are appended, and every episode ends up recorded
+    // once. A complete last record that lost only its newline is kept.
+    let first = text.lines().next().unwrap();
+    std::fs::write(&path, format!("{first}\n{{\"variant\":\"ora")).unwrap();
+    harness::run(&config, &options(&dir, None)).unwrap();
+    assert_eq!(harness::read_records(&path).unwrap().len(), n);
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.ends_with('\n') && !text.contains("\"ora\n"));
+    std::fs::write(&path, first).unwrap();
+    harness::run(&config, &options(&dir, None)).unwrap();
+    assert_eq!(harness::read_records(&path).unwrap().len(), n);
+    let text = std::fs::read_to_string(&path).unwrap();
     std::fs::write(&path, format!("not json\n{text}")).unwrap();
     match harness::read_records(&path) {
         Err(harness::HarnessError::Malformed { line, .. }) => assert_eq!(line, 1),
