@@ -88,6 +88,20 @@ fn pick_house() -> (u64, String, String) {
     panic!("no candidate house has two goal categories");
 }
 
+/// The robot's log filter: its decisions (debug) and warnings.
+const ROBOT_LOG: &str = "warn,sornav_platform_scout=debug";
+
+fn log_file(dir: &std::path::Path, name: &str) -> std::fs::File {
+    std::fs::File::create(dir.join(name)).expect("create a log file")
+}
+
+/// The last `n` lines of a log containing `needle`.
+fn log_tail(path: &std::path::Path, needle: &str, n: usize) -> String {
+    let text = std::fs::read_to_string(path).unwrap_or_default();
+    let lines: Vec<&str> = text.lines().filter(|l| l.contains(needle)).collect();
+    lines[lines.len().saturating_sub(n)..].join("\n")
+}
+
 fn request(category: &str) -> String {
     match category {
         "tv_monitor" => "find the television".to_owned(),
@@ -133,14 +147,16 @@ fn robot_confirms_two_targets_in_a_row_against_the_simulated_robot() {
         ])
         .env("RUST_LOG", "warn")
         .stdout(Stdio::null())
+        .stderr(log_file(&dir, "simbot.log"))
         .spawn()
         .expect("spawn sornav-simbot");
     let robot = Command::new(env!("CARGO_BIN_EXE_sornav-robot"))
         .arg("--config")
         .arg(&config_path)
         .args(["--status-every-s", "0"])
-        .env("RUST_LOG", "warn")
+        .env("RUST_LOG", ROBOT_LOG)
         .stdout(Stdio::piped())
+        .stderr(log_file(&dir, "robot.log"))
         .spawn()
         .expect("spawn sornav-robot");
     let mut children = Killer(vec![robot, simbot]);
@@ -166,7 +182,9 @@ fn robot_confirms_two_targets_in_a_row_against_the_simulated_robot() {
             loop {
                 assert!(
                     t0.elapsed() < Duration::from_secs(BUDGET_S),
-                    "{request}: not confirmed in {BUDGET_S} s; last status {last:?}"
+                    "{request}: not confirmed in {BUDGET_S} s; last status {last:?}\n\
+                     the robot's last decisions:\n{}",
+                    log_tail(&dir.join("robot.log"), "decision", 40)
                 );
                 poll(last);
                 let requested = last
@@ -206,7 +224,13 @@ fn robot_confirms_two_targets_in_a_row_against_the_simulated_robot() {
         "{a1:?} -> {a2:?}"
     );
     assert_eq!(second.confirmed[0], first.confirmed[0]);
-    assert_eq!(second.bridge.rejected_messages, 0);
+    assert_eq!(
+        second.bridge.rejected_messages,
+        0,
+        "last error: {:?}; rejections:\n{}",
+        second.last_error,
+        log_tail(&dir.join("robot.log"), "rejected", 10)
+    );
 
     // Both objects are real instances of their category.
     let house = ProceduralConfig {

@@ -123,7 +123,10 @@ pub enum NodeState {
     Searching,
     /// The target was confirmed; waiting for the next request.
     Confirmed,
-    /// Nothing left to explore; waiting for the next request.
+    /// No reachable frontier and no confirmed target: holding, while the
+    /// agent keeps observing and is re-stepped at the control rate (the
+    /// search resumes by itself when a frontier or a candidate appears), or
+    /// the next request.
     Exhausted,
     /// Shut down.
     Stopped,
@@ -140,8 +143,14 @@ pub struct BridgeStats {
     pub registered_scans: u64,
     /// Terrain maps used.
     pub terrain_maps: u64,
-    /// Messages rejected (malformed cloud, wrong frame, bad odometry).
+    /// Messages rejected (malformed cloud, wrong frame, bad odometry, blank
+    /// or unknown request).
     pub rejected_messages: u64,
+    /// Clouds dropped because no odometry had arrived yet (no sensor origin
+    /// to carve free space from): a start-up race between topics, not a
+    /// malformed message, so not counted in `rejected_messages`.
+    #[serde(default)]
+    pub clouds_before_odometry: u64,
     /// Cloud points skipped (non-finite coordinate or bad label).
     pub skipped_points: u64,
     /// Buffered points dropped by the per-observation cap.
@@ -245,6 +254,8 @@ pub struct Bridge {
     agent: Option<Agent>,
     pending_target: Option<String>,
     state: NodeState,
+    /// The state to return to when odometry is fresh again.
+    paused: Option<NodeState>,
     odom: Option<OdomSample>,
     labelled: VecDeque<Vec<LabeledPoint>>,
     unlabelled: VecDeque<Vec<Point3<f64>>>,
@@ -290,6 +301,7 @@ impl Bridge {
             agent: None,
             pending_target,
             state: NodeState::WaitingForOdometry,
+            paused: None,
             odom: None,
             labelled: VecDeque::new(),
             unlabelled: VecDeque::new(),
@@ -375,6 +387,7 @@ impl Bridge {
     }
 
     fn reject(&mut self, e: BridgeError) -> BridgeError {
+        tracing::debug!(error = %e, "message rejected");
         self.stats.rejected_messages += 1;
         self.last_error = Some(e.to_string());
         e
@@ -434,19 +447,22 @@ impl Bridge {
                 let _ = self.apply_target(&request, now);
             }
         } else if self.state == NodeState::WaitingForOdometry {
-            self.state = self.resumed_state();
+            self.resume();
         }
         Ok(())
     }
 
-    /// The state once odometry is fresh again: searching when the agent has
-    /// a target, idle otherwise.
-    fn resumed_state(&self) -> NodeState {
-        if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
-            NodeState::Searching
-        } else {
-            NodeState::Idle
-        }
+    /// Odometry is fresh again: back to the state it interrupted (a confirmed
+    /// target stays confirmed, an exhausted search keeps re-checking), or
+    /// searching when a target was requested meanwhile.
+    fn resume(&mut self) {
+        self.state = self.paused.take().unwrap_or_else(|| {
+            if self.agent.as_ref().is_some_and(|a| a.target().is_some()) {
+                NodeState::Searching
+            } else {
+                NodeState::Idle
+            }
+        });
     }
 
     fn base_pose(&self) -> Option<RobotPose> {
@@ -490,7 +506,8 @@ impl Bridge {
 
     /// Checks the frame of the cloud on `topic` and that odometry arrived,
     /// then validates its layout and decodes it with `decode`; every error
-    /// is rejected (counted) with the topic.
+    /// is rejected (counted) with the topic, except a cloud before the first
+    /// odometry (counted in `clouds_before_odometry`).
     fn decode_cloud<T>(
         &mut self,
         topic: &'static str,
@@ -499,7 +516,8 @@ impl Bridge {
     ) -> Result<T, BridgeError> {
         self.check_frame(topic, &msg.header)?;
         if self.odom.is_none() {
-            return Err(self.reject(BridgeError::NoOdometry(topic)));
+            self.stats.clouds_before_odometry += 1;
+            return Err(BridgeError::NoOdometry(topic));
         }
         CloudView::new(msg)
             .and_then(|view| decode(&view))
@@ -588,7 +606,10 @@ impl Bridge {
     }
 
     /// `/sornav/target`: a new request ("find the television"). The maps are
-    /// kept.
+    /// kept. A request for the category already being searched for
+    /// (`searching` or `exhausted`) does not restart the search (the target
+    /// gate keeps its evidence; operators and scripts re-send requests);
+    /// like any request it re-enables autonomy mode.
     ///
     /// # Errors
     /// [`BridgeError::BlankTarget`], [`BridgeError::Agent`] for a request no
@@ -606,9 +627,30 @@ impl Bridge {
             self.pending_target = Some(request);
             return Ok(vec![self.status_message(now)]);
         }
-        self.apply_target(&request, now)?;
+        if self.is_current_search(&request) {
+            tracing::info!(request, "already searching for this category");
+        } else {
+            self.apply_target(&request, now)?;
+        }
         // Autonomy mode and the `/stop` release again, as at start.
         Ok(self.start(now))
+    }
+
+    /// Whether `request` names the category of the search under way.
+    fn is_current_search(&self, request: &str) -> bool {
+        let searching = matches!(self.state, NodeState::Searching | NodeState::Exhausted)
+            || (self.state == NodeState::WaitingForOdometry
+                && matches!(
+                    self.paused,
+                    Some(NodeState::Searching | NodeState::Exhausted)
+                ));
+        let Some(agent) = self.agent.as_ref().filter(|_| searching) else {
+            return false;
+        };
+        match (agent.target(), agent.vocabulary().resolve(request)) {
+            (Some(current), Ok(new)) => current.category == new.category,
+            _ => false,
+        }
     }
 
     fn apply_target(&mut self, request: &str, now: Duration) -> Result<(), BridgeError> {
@@ -624,6 +666,7 @@ impl Bridge {
                 } else {
                     NodeState::WaitingForOdometry
                 };
+                self.paused = None;
                 self.holding = false;
                 // Step at the next tick.
                 self.last_step = None;
@@ -757,6 +800,7 @@ impl Bridge {
                 && !matches!(self.state, NodeState::WaitingForOdometry)
                 && self.agent.is_some()
             {
+                self.paused = Some(self.state);
                 self.state = NodeState::WaitingForOdometry;
                 self.last_error = Some("odometry is stale: holding".into());
                 self.holding = false;
@@ -769,14 +813,17 @@ impl Bridge {
             return out;
         }
         if self.state == NodeState::WaitingForOdometry && self.agent.is_some() {
-            self.state = self.resumed_state();
+            self.resume();
         }
         if due(self.last_observe, now, 1.0 / self.config.rates.observe_hz) {
             self.observe(now);
         }
         if due(self.last_step, now, 1.0 / self.config.rates.control_hz) {
             self.last_step = Some(now);
-            if self.state == NodeState::Searching {
+            // An exhausted search is re-checked at every step: the maps keep
+            // growing while the robot holds (a door opens, the terrain map
+            // fills in, a candidate gathers its N_obs observations).
+            if matches!(self.state, NodeState::Searching | NodeState::Exhausted) {
                 self.step_agent(now, &mut out);
             }
             out.push(self.status_message(now));
@@ -830,11 +877,15 @@ impl Bridge {
         }
         match result {
             Ok(AgentCommand::Dispatch { mission, .. }) => {
+                self.state = NodeState::Searching;
                 out.extend(self.mission_messages(&mission, now));
             }
             Ok(AgentCommand::Continue { mission: None }) => self.hold(out),
             Ok(AgentCommand::Continue { mission: Some(_) }) => {}
-            Ok(AgentCommand::Verify { .. }) => self.hold(out),
+            Ok(AgentCommand::Verify { .. }) => {
+                self.state = NodeState::Searching;
+                self.hold(out);
+            }
             Ok(AgentCommand::Stop { object, centre }) => {
                 let (category, request) = agent
                     .target()
@@ -852,6 +903,9 @@ impl Bridge {
                 self.hold(out);
             }
             Ok(AgentCommand::Exhausted) => {
+                if self.state != NodeState::Exhausted {
+                    tracing::info!("search exhausted: holding and re-checking at every step");
+                }
                 self.state = NodeState::Exhausted;
                 self.hold(out);
             }

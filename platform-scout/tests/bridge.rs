@@ -158,7 +158,10 @@ fn bad_inputs_are_rejected_and_counted() {
         Err(BridgeError::Agent(_))
     ));
     let s = b.status(ms(0));
-    assert_eq!(s.bridge.rejected_messages, 6);
+    // The cloud before the first odometry is a start-up race, counted
+    // apart.
+    assert_eq!(s.bridge.clouds_before_odometry, 1);
+    assert_eq!(s.bridge.rejected_messages, 5);
     assert_eq!(s.state, NodeState::Idle);
     assert!(s.last_error.unwrap().contains("spaceship"));
     // "/map" is accepted as "map".
@@ -250,8 +253,18 @@ fn point_cap_drops_the_oldest_clouds() {
 
 /// Drives the bridge in the room: returns the outputs of every tick.
 fn run(b: &mut Bridge, from: u64, to: u64, pose: (f64, f64, f64)) -> Vec<Outgoing> {
-    let pts = room();
-    let cloud = semantic(&pts);
+    run_in(b, &room(), from, to, pose)
+}
+
+/// [`run`] in another scene.
+fn run_in(
+    b: &mut Bridge,
+    pts: &[[f64; 4]],
+    from: u64,
+    to: u64,
+    pose: (f64, f64, f64),
+) -> Vec<Outgoing> {
+    let cloud = semantic(pts);
     let mut out = Vec::new();
     for t in (from..to).step_by(250) {
         b.on_odometry(&odom(pose.0, pose.1, pose.2), ms(t)).unwrap();
@@ -377,6 +390,105 @@ fn finds_the_tv_then_switches_target_keeping_the_maps() {
     let s = status_of(&out).unwrap();
     assert!(s.agent.unwrap().observations > observations);
     assert_eq!(s.confirmed.len(), 1, "the first confirmation is kept");
+}
+
+#[test]
+fn a_repeated_request_does_not_restart_the_search() {
+    let mut b = Bridge::new(config()).unwrap();
+    let tv = |data: &str| RosString { data: data.into() };
+    b.on_target(&tv("find the television"), ms(0)).unwrap();
+    let out = run(&mut b, 0, 5000, (0.0, 0.0, 0.0));
+    let m = status_of(&out).unwrap().active_mission.expect("a mission");
+    assert_eq!(m.kind, "nav_to_object");
+    // The same category again (other words): autonomy re-enabled, the
+    // mission and the gate's evidence kept.
+    let out = b.on_target(&tv("tv"), ms(5000)).unwrap();
+    assert!(matches!(out[0], Outgoing::Joy(_)));
+    let s = status_of(&out).unwrap();
+    assert_eq!(s.active_mission, Some(m.clone()));
+    assert_eq!(s.request.as_deref(), Some("find the television"));
+    // Another category restarts.
+    let s = status_of(&b.on_target(&tv("toilet"), ms(5000)).unwrap()).unwrap();
+    assert_eq!(s.active_mission, None);
+    assert_eq!(s.target.as_deref(), Some("toilet"));
+}
+
+#[test]
+fn a_confirmed_target_stays_confirmed_across_stale_odometry() {
+    let mut b = Bridge::new(config()).unwrap();
+    b.on_target(&RosString { data: "tv".into() }, ms(0))
+        .unwrap();
+    let out = run(&mut b, 0, 5000, (0.0, 0.0, 0.0));
+    let nav = *waypoints(&out).last().unwrap();
+    let yaw = (1.875 - nav.y).atan2(-0.95 - nav.x);
+    let _ = run(&mut b, 5000, 12_000, (nav.x, nav.y, yaw));
+    assert_eq!(b.state(), NodeState::Confirmed);
+    let _ = b.tick(ms(15_000)); // odometry last at 11.75 s
+    assert_eq!(b.state(), NodeState::WaitingForOdometry);
+    let out = run(&mut b, 15_000, 20_000, (nav.x, nav.y, yaw));
+    let s = status_of(&out).unwrap();
+    assert_eq!(s.state, NodeState::Confirmed, "not searching again");
+    assert_eq!(s.confirmed.len(), 1, "no second confirmation");
+}
+
+/// The room with its doorway walled up: nothing to explore.
+fn closed_room() -> Vec<[f64; 4]> {
+    let mut pts = room();
+    for j in -12..=12 {
+        for h in 0..18 {
+            pts.push([3.0, f64::from(j) * 0.05, f64::from(h) * 0.05, 1.0]);
+        }
+    }
+    pts
+}
+
+#[test]
+fn an_exhausted_search_resumes_when_a_candidate_appears() {
+    let c = config();
+    let toilet = c
+        .agent
+        .labels
+        .iter()
+        .find(|e| e.name == "toilet")
+        .expect("toilet in the vocabulary")
+        .id;
+    let mut b = Bridge::new(c).unwrap();
+    b.on_target(
+        &RosString {
+            data: "find the toilet".into(),
+        },
+        ms(0),
+    )
+    .unwrap();
+    let room = closed_room();
+    let out = run_in(&mut b, &room, 0, 4000, (0.0, 0.0, 0.0));
+    let s = status_of(&out).unwrap();
+    assert_eq!(s.state, NodeState::Exhausted, "{:?}", s.last_decision);
+    assert_eq!(s.frontiers, 0);
+    assert_eq!(
+        waypoints(&out).last(),
+        Some(&Point::new(0.0, 0.0, 0.0)),
+        "holding"
+    );
+    let steps = s.bridge.steps;
+
+    // Still stepped while exhausted: a toilet comes into view (someone
+    // opened the bathroom door), gathers N_obs observations, and the
+    // search resumes with NAV_TO_OBJECT.
+    let mut with_toilet = room;
+    for a in 0..8 {
+        for h in 0..8 {
+            let (x, z) = (1.025 + f64::from(a) * 0.05, 0.025 + f64::from(h) * 0.05);
+            with_toilet.push([x, -1.825, z, f64::from(toilet)]);
+        }
+    }
+    let out = run_in(&mut b, &with_toilet, 4000, 9000, (0.0, 0.0, 0.0));
+    let s = status_of(&out).unwrap();
+    assert!(s.bridge.steps > steps);
+    assert_eq!(s.state, NodeState::Searching, "{:?}", s.last_decision);
+    let m = s.active_mission.expect("a mission");
+    assert_eq!(m.kind, "nav_to_object");
+    assert!(m.waypoint[0] > 0.5 && m.waypoint[1] < -0.5, "{m:?}");
 }
 
 #[test]

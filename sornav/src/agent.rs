@@ -67,7 +67,12 @@ pub enum AgentCommand {
         /// Its centre.
         centre: Point3<f64>,
     },
-    /// Nothing left to explore and no candidate: the search is exhausted.
+    /// No reachable frontier, no active mission and no accepted candidate
+    /// at this step: the search is exhausted *for now*. Not terminal: later
+    /// observations can open a frontier or bring a candidate to N_obs, and
+    /// the next step then dispatches again (the simulator adapter turns in
+    /// place for a full turn before giving up; the robot bridge holds and
+    /// keeps stepping).
     Exhausted,
 }
 
