@@ -172,7 +172,7 @@ fn slow_server_times_out_and_explores() {
         (
             200,
             completion(r#"{"action":"relocate_cluster","cluster_id":7,"reason":"late"}"#),
-            Duration::from_millis(2500),
+            Duration::from_secs(6),
         )
     }));
     let mut policy = LlmPolicy::http(LlmConfig {
@@ -182,11 +182,8 @@ fn slow_server_times_out_and_explores() {
     .unwrap();
     let t = Instant::now();
     let d = policy.decide(&snapshot(), &at(1, 0.0));
-    assert!(
-        t.elapsed() < Duration::from_millis(2000),
-        "{:?}",
-        t.elapsed()
-    );
+    // Far below the server's 6 s (a generous margin for a loaded machine).
+    assert!(t.elapsed() < Duration::from_secs(4), "{:?}", t.elapsed());
     assert_eq!(d.action, PolicyAction::ContinueExplore);
     assert_eq!(policy.last_failure(), Some(&LlmFailure::Timeout));
 }
@@ -327,7 +324,7 @@ fn asynchronous_mode_never_blocks_and_delivers() {
         (
             200,
             completion(r#"{"action":"relocate_cluster","cluster_id":7,"reason":"bathroom"}"#),
-            Duration::from_millis(400),
+            Duration::from_secs(3),
         )
     }));
     let mut policy = LlmPolicy::http(LlmConfig {
@@ -337,8 +334,9 @@ fn asynchronous_mode_never_blocks_and_delivers() {
     .unwrap();
     let t = Instant::now();
     let d = policy.decide(&snapshot(), &at(1, 0.0));
+    // Far below the server's 3 s (a generous margin for a loaded machine).
     assert!(
-        t.elapsed() < Duration::from_millis(200),
+        t.elapsed() < Duration::from_millis(1500),
         "blocked for {:?}",
         t.elapsed()
     );
@@ -366,7 +364,12 @@ fn asynchronous_late_answer_is_dropped_when_the_mission_changed() {
     policy.decide(&snapshot(), &at(1, 0.0));
     // Let the answer arrive, then ask in a new mission (e.g. a relocation started
     // and ended): the answer to the old question must not be used.
-    thread::sleep(Duration::from_millis(600));
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while server.answered() == 0 {
+        assert!(Instant::now() < deadline, "the server never answered");
+        thread::sleep(Duration::from_millis(20));
+    }
+    thread::sleep(Duration::from_millis(300)); // the client reads it
     let mut changed = snapshot();
     changed.local_context.push(ContextObject::new("lamp", 40.0));
     let d = policy.decide(&changed, &at(2, 0.6));

@@ -37,12 +37,19 @@ pub struct ChatServer {
     pub requests: Arc<Mutex<Vec<Value>>>,
     /// Chat-completion requests received.
     pub hits: Arc<AtomicUsize>,
+    /// Chat-completion answers written (after their delay).
+    pub answered: Arc<AtomicUsize>,
 }
 
 impl ChatServer {
     /// Chat-completion requests received so far.
     pub fn hits(&self) -> usize {
         self.hits.load(Ordering::SeqCst)
+    }
+
+    /// Chat-completion answers written so far.
+    pub fn answered(&self) -> usize {
+        self.answered.load(Ordering::SeqCst)
     }
 }
 
@@ -86,12 +93,21 @@ pub fn serve(handler: Arc<Handler>) -> ChatServer {
     );
     let requests = Arc::new(Mutex::new(Vec::new()));
     let hits = Arc::new(AtomicUsize::new(0));
-    let (req2, hits2) = (Arc::clone(&requests), Arc::clone(&hits));
+    let answered = Arc::new(AtomicUsize::new(0));
+    let (req2, hits2, answered2) = (
+        Arc::clone(&requests),
+        Arc::clone(&hits),
+        Arc::clone(&answered),
+    );
     thread::spawn(move || {
         for stream in listener.incoming() {
             let Ok(mut stream) = stream else { continue };
             let handler = Arc::clone(&handler);
-            let (req3, hits3) = (Arc::clone(&req2), Arc::clone(&hits2));
+            let (req3, hits3, answered3) = (
+                Arc::clone(&req2),
+                Arc::clone(&hits2),
+                Arc::clone(&answered2),
+            );
             thread::spawn(move || {
                 let Some(body) = read_request(&mut stream) else {
                     let _ = stream.write_all(
@@ -109,7 +125,9 @@ pub fn serve(handler: Arc<Handler>) -> ChatServer {
                     "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{reply}",
                     reply.len()
                 );
-                let _ = stream.write_all(text.as_bytes());
+                if stream.write_all(text.as_bytes()).is_ok() {
+                    answered3.fetch_add(1, Ordering::SeqCst);
+                }
             });
         }
     });
@@ -117,6 +135,7 @@ pub fn serve(handler: Arc<Handler>) -> ChatServer {
         base_url,
         requests,
         hits,
+        answered,
     }
 }
 
