@@ -638,12 +638,12 @@ impl Bridge {
 
     /// Whether `request` names the category of the search under way.
     fn is_current_search(&self, request: &str) -> bool {
-        let searching = matches!(self.state, NodeState::Searching | NodeState::Exhausted)
-            || (self.state == NodeState::WaitingForOdometry
-                && matches!(
-                    self.paused,
-                    Some(NodeState::Searching | NodeState::Exhausted)
-                ));
+        // While odometry is stale, the state it interrupted.
+        let state = match self.state {
+            NodeState::WaitingForOdometry => self.paused,
+            s => Some(s),
+        };
+        let searching = matches!(state, Some(NodeState::Searching | NodeState::Exhausted));
         let Some(agent) = self.agent.as_ref().filter(|_| searching) else {
             return false;
         };
