@@ -57,6 +57,9 @@ pub struct Cluster<Id> {
     /// `U_geo(C_k) = n_k (1 + eta r_k) / (1 + d_k)`; 0 for an unreachable
     /// cluster.
     pub utility: f64,
+    /// The level (floor) of the members (0 on single-floor graphs).
+    #[serde(default)]
+    pub level: u16,
 }
 
 impl<Id> Cluster<Id> {
@@ -104,6 +107,8 @@ pub struct ClusterEdge<Id> {
 pub struct ClusterGraph<Id> {
     config: ClusterConfig,
     robot: Point2<f64>,
+    #[serde(default)]
+    robot_level: u16,
     clusters: Vec<Cluster<Id>>,
     /// `(frontier, its cluster)`, sorted by frontier id.
     membership: Vec<(Id, ClusterId)>,
@@ -238,7 +243,18 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
             }
         }
 
-        let groups = connected_groups(frontiers.len(), edges.iter().copied(), config.rho_c);
+        let levels: Vec<u16> = frontiers
+            .iter()
+            .map(|f| graph.level(GraphNode::Frontier(f.0)))
+            .collect();
+        let groups = connected_groups(
+            frontiers.len(),
+            edges
+                .iter()
+                .copied()
+                .filter(|&(i, j, _)| levels[i] == levels[j]),
+            config.rho_c,
+        );
         let mut cluster_of = vec![0_usize; frontiers.len()];
         for (k, group) in groups.iter().enumerate() {
             for &i in group {
@@ -248,13 +264,9 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
 
         let mut clusters = Vec::with_capacity(groups.len());
         for (k, group) in groups.iter().enumerate() {
-            clusters.push(Self::make_cluster(
-                graph,
-                config,
-                ClusterId(k),
-                group,
-                &frontiers,
-            )?);
+            let mut cluster = Self::make_cluster(graph, config, ClusterId(k), group, &frontiers)?;
+            cluster.level = group.first().map_or(0, |&i| levels[i]);
+            clusters.push(cluster);
         }
 
         let edges = Self::cluster_edges(&edges, &cluster_of, &frontiers);
@@ -281,6 +293,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
         Ok(Self {
             config: *config,
             robot,
+            robot_level: graph.level(GraphNode::Robot),
             clusters,
             membership,
             edges,
@@ -349,6 +362,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
             spread,
             relocation,
             utility,
+            level: 0,
         })
     }
 
@@ -395,6 +409,11 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
     /// Robot position (m) at build time.
     pub fn robot_position(&self) -> Point2<f64> {
         self.robot
+    }
+
+    /// The level (floor) of the robot the graph was built with.
+    pub fn robot_level(&self) -> u16 {
+        self.robot_level
     }
 
     /// Number of clusters.

@@ -20,6 +20,14 @@ pub trait ContextObject {
     fn support(&self) -> usize;
     /// Centre `p_j` (m, world frame, z up). Only x and y enter distances.
     fn centre(&self) -> Point3<f64>;
+    /// The level (floor) the object is on, when known: the contexts of a
+    /// cluster graph count only objects of the robot's or the cluster's
+    /// level (a bed upstairs, seen through a stairwell, is not part of the
+    /// kitchen's context). `None` (the default): the object counts on every
+    /// level.
+    fn level(&self) -> Option<u16> {
+        None
+    }
 }
 
 impl<T: ContextObject + ?Sized> ContextObject for &T {
@@ -32,6 +40,9 @@ impl<T: ContextObject + ?Sized> ContextObject for &T {
     fn centre(&self) -> Point3<f64> {
         (**self).centre()
     }
+    fn level(&self) -> Option<u16> {
+        (**self).level()
+    }
 }
 
 /// A plain object record implementing [`ContextObject`].
@@ -43,6 +54,9 @@ pub struct ObjectSummary {
     pub support: usize,
     /// Centre `p_j` (m).
     pub centre: Point3<f64>,
+    /// The level the object is on (`None`: unknown, counts everywhere).
+    #[serde(default)]
+    pub level: Option<u16>,
 }
 
 impl ContextObject for ObjectSummary {
@@ -54,6 +68,9 @@ impl ContextObject for ObjectSummary {
     }
     fn centre(&self) -> Point3<f64> {
         self.centre
+    }
+    fn level(&self) -> Option<u16> {
+        self.level
     }
 }
 
@@ -114,6 +131,7 @@ fn qualifying<O: ContextObject>(
     objects: &[O],
     n_min: usize,
     radius: f64,
+    level: Option<u16>,
     distance: impl Fn(Point2<f64>) -> f64,
 ) -> (Vec<(usize, f64)>, usize) {
     let mut rejected = 0;
@@ -124,6 +142,11 @@ fn qualifying<O: ContextObject>(
             continue;
         };
         if o.support() < n_min {
+            continue;
+        }
+        if let (Some(want), Some(have)) = (level, o.level())
+            && want != have
+        {
             continue;
         }
         let d = distance(xy);
@@ -165,8 +188,22 @@ pub fn robot_context<O: ContextObject>(
     objects: &[O],
     config: &crate::ClusterConfig,
 ) -> RobotContext {
+    robot_context_on_level(robot, None, objects, config)
+}
+
+/// [`robot_context`] counting only objects on `level` (and objects of
+/// unknown level); `None`: every object.
+///
+/// # Complexity
+/// O(M log M) for M objects.
+pub fn robot_context_on_level<O: ContextObject>(
+    robot: Point2<f64>,
+    level: Option<u16>,
+    objects: &[O],
+    config: &crate::ClusterConfig,
+) -> RobotContext {
     let (kept, rejected_non_finite) =
-        qualifying(objects, config.n_min, config.r_r, |xy| (xy - robot).norm());
+        qualifying(objects, config.n_min, config.r_r, level, |xy| (xy - robot).norm());
     RobotContext {
         objects: kept
             .into_iter()
@@ -181,8 +218,9 @@ pub fn robot_context<O: ContextObject>(
 
 impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
     /// The semantic context `S_k` of cluster `k`: every object with
-    /// `N_j >= N_min` whose centre lies within `R_s` (horizontally) of a
-    /// member frontier, with that minimum distance.
+    /// `N_j >= N_min` on the cluster's level (or of unknown level) whose
+    /// centre lies within `R_s` (horizontally) of a member frontier, with
+    /// that minimum distance.
     ///
     /// # Errors
     /// [`ClusterError::UnknownCluster`] when `k` is not a cluster of this
@@ -200,7 +238,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
             .ok_or(ClusterError::UnknownCluster(k.0, self.len()))?;
         let members = &cluster.member_positions;
         let (kept, rejected_non_finite) =
-            qualifying(objects, self.config().n_min, self.config().r_s, |xy| {
+            qualifying(objects, self.config().n_min, self.config().r_s, Some(cluster.level), |xy| {
                 members
                     .iter()
                     .map(|m| (xy - m).norm())
@@ -233,9 +271,15 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
     }
 
     /// The robot's context `S_r` at the robot position the graph was built
-    /// with; see [`robot_context`].
+    /// with, counting objects of the robot's level only; see
+    /// [`robot_context`].
     pub fn robot_context<O: ContextObject>(&self, objects: &[O]) -> RobotContext {
-        robot_context(self.robot_position(), objects, self.config())
+        robot_context_on_level(
+            self.robot_position(),
+            Some(self.robot_level()),
+            objects,
+            self.config(),
+        )
     }
 }
 

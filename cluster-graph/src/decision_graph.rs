@@ -66,6 +66,15 @@ pub trait DecisionGraph {
         to: GraphNode<Self::FrontierId>,
     ) -> Option<Cow<'_, [Point2<f64>]>>;
 
+    /// The level (floor) of a node; frontiers are grouped only with
+    /// frontiers of their own level, and semantic contexts count only
+    /// objects of the same level. The default puts everything on level 0
+    /// (single-floor graphs).
+    fn level(&self, node: GraphNode<Self::FrontierId>) -> u16 {
+        let _ = node;
+        0
+    }
+
     /// Every frontier-frontier edge `(a, b, w_ab)`, each unordered pair once.
     ///
     /// The default implementation queries [`cost`](Self::cost) for all pairs

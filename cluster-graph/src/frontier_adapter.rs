@@ -6,8 +6,11 @@
 //!   the unexplored boundary is. Paths end at the frontier's executable
 //!   viewpoint, as the frontier graph stores them.
 //! * The robot is [`FrontierGraph::robot`]; the home node plays no part.
-//! * Costs and paths are the frontier graph's edges, unchanged (no new path
-//!   query).
+//! * Costs and paths are the frontier graph's edges (no new path query);
+//!   paths are their horizontal projection (a multi-level graph's 3-D
+//!   paths stay available from the frontier graph itself).
+//! * A frontier's level is its node's level; frontiers of different levels
+//!   are never grouped together.
 //!
 //! [`FrontierNode::centroid`]: sornav_frontier_graph::FrontierNode::centroid
 
@@ -46,12 +49,12 @@ impl DecisionGraph for FrontierGraph {
         to: GraphNode<FrontierId>,
     ) -> Option<Cow<'_, [Point2<f64>]>> {
         let (from, to) = (node_id(from), node_id(to));
-        let edge = self.edge(from, to)?;
-        if edge.from == from {
-            Some(Cow::Borrowed(&edge.path))
-        } else {
-            Some(Cow::Owned(edge.path.iter().rev().copied().collect()))
-        }
+        let path = self.edge(from, to)?.path_from(from)?;
+        Some(Cow::Owned(path.iter().map(|p| p.xy()).collect()))
+    }
+
+    fn level(&self, node: GraphNode<FrontierId>) -> u16 {
+        FrontierGraph::level(self, node_id(node)).map_or(0, |l| l.0)
     }
 
     fn frontier_edges(&self) -> impl Iterator<Item = (FrontierId, FrontierId, f64)> + '_ {

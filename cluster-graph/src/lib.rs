@@ -92,7 +92,7 @@ pub use cluster_graph::{Cluster, ClusterEdge, ClusterGraph, ClusterId, Relocatio
 pub use config::{ClusterConfig, MAX_ETA};
 pub use context::{
     CandidateObject, ClusterContext, ContextObject, NearbyObject, ObjectSummary, RobotContext,
-    robot_context,
+    robot_context, robot_context_on_level,
 };
 pub use decision_graph::{
     DecisionGraph, GraphNode, MAX_ABS_COORD, SparseDecisionGraph, SparseEdge,

@@ -479,12 +479,16 @@ impl<F: AgentFactory> SornavPolicy<F> {
         let Some(agent) = self.agent.as_ref() else {
             return Action::Stop;
         };
-        let grid = agent.frontier_map().grid();
+        let resolution = agent.config().frontier.grid.resolution;
         let heading = |k: i32| yaw + f64::from(k) * self.turn_rad;
-        let cell = |p: &Point2<f64>| grid.cell_of(p).ok();
+        let cell = |p: &Point2<f64>| {
+            let (x, y) = ((p.x / resolution).floor(), (p.y / resolution).floor());
+            (x.is_finite() && y.is_finite()).then_some((x as i64, y as i64))
+        };
         // The forward segment must stay on the agent's traversable map
-        // (the start cell may be inside the inflation margin).
-        let samples = (self.forward_m / (grid.resolution() / 2.0)).ceil().max(1.0) as usize;
+        // (its own level's grid, a stair approach or a stair's surface; the
+        // start cell may be inside the inflation margin).
+        let samples = (self.forward_m / (resolution / 2.0)).ceil().max(1.0) as usize;
         let start_cell = cell(&here);
         let mut best: Option<(f64, i32)> = None;
         for k in -(self.turns / 2 - 1)..=(self.turns / 2) {
@@ -496,7 +500,9 @@ impl<F: AgentFactory> SornavPolicy<F> {
             }
             let free = (1..=samples).all(|i| {
                 let q = here + (end - here) * (i as f64 / samples as f64);
-                cell(&q).is_some_and(|cq| Some(cq) == start_cell || grid.is_traversable(cq))
+                cell(&q).is_some_and(|cq| {
+                    Some(cq) == start_cell || agent.is_traversable(&Point3::new(q.x, q.y, feet.z))
+                })
             });
             if !free {
                 continue;

@@ -212,7 +212,105 @@ impl GraphConfig {
     }
 }
 
-/// All parameters of a [`crate::FrontierMap`].
+/// Floors and stairs of a [`crate::MultiLevelMap`] (ignored by the
+/// single-level [`crate::FrontierMap`]). Robot geometry (step height,
+/// height, radius) comes from [`GridConfig`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct LevelConfig {
+    /// Whether the robot can climb stairs. `false`: one level at the first
+    /// pose's height, no surface map, no stairs — exactly the single-floor
+    /// [`crate::FrontierMap`] (robots that cannot climb, 2-D users).
+    pub allow_stairs: bool,
+    /// Column size (m) of the walkable-surface map (default 0.1: two grid
+    /// cells; a stair tread is 2-3 columns deep).
+    pub surface_resolution: f64,
+    /// A surface within this height (m) of a level's floor belongs to the
+    /// level (default 0.08).
+    pub level_tolerance: f64,
+    /// The robot is on a level when its feet are within this height (m) of
+    /// the level's floor (default 0.25: on the first tread it still maps
+    /// the floor it came from).
+    pub robot_level_tolerance: f64,
+    /// Floors of two levels differ by at least this (m, default 1.8):
+    /// landings and mezzanine-like platforms lower than this are stair
+    /// surfaces, not levels.
+    pub min_level_separation: f64,
+    /// A flat walkable area of at least this size (m², default 3) at a new
+    /// height, reached over a stair, makes a new level.
+    pub min_level_area: f64,
+    /// A chain of steps is a stair when it climbs or descends at least this
+    /// (m, default 0.4) from the level it starts on.
+    pub min_stair_rise: f64,
+    /// Cost (graph units, metres of path) added for climbing one stair
+    /// (default 2).
+    pub stair_cost_up: f64,
+    /// Cost added for descending one stair (default 1).
+    pub stair_cost_down: f64,
+    /// A stair end is joined to the nearest traversable cell of its level
+    /// within this radius (m, default 0.6).
+    pub portal_radius: f64,
+}
+
+impl Default for LevelConfig {
+    fn default() -> Self {
+        Self {
+            allow_stairs: true,
+            surface_resolution: 0.1,
+            level_tolerance: 0.08,
+            robot_level_tolerance: 0.25,
+            min_level_separation: 1.8,
+            min_level_area: 3.0,
+            min_stair_rise: 0.4,
+            stair_cost_up: 2.0,
+            stair_cost_down: 1.0,
+            portal_radius: 0.6,
+        }
+    }
+}
+
+impl LevelConfig {
+    /// Checks every value for consistency.
+    ///
+    /// # Errors
+    /// [`FrontierError::InvalidConfig`] naming the offending field.
+    pub fn validate(&self) -> Result<(), FrontierError> {
+        let bad = |m: &str| Err(FrontierError::InvalidConfig(format!("levels: {m}")));
+        let all = [
+            self.surface_resolution,
+            self.level_tolerance,
+            self.robot_level_tolerance,
+            self.min_level_separation,
+            self.min_level_area,
+            self.min_stair_rise,
+            self.stair_cost_up,
+            self.stair_cost_down,
+            self.portal_radius,
+        ];
+        if all.iter().any(|v| !v.is_finite() || *v < 0.0) {
+            return bad("all level parameters must be finite and >= 0");
+        }
+        if !(0.02..=1.0).contains(&self.surface_resolution) {
+            return bad("surface_resolution must be in [0.02, 1] m");
+        }
+        if self.level_tolerance <= 0.0 || self.robot_level_tolerance < self.level_tolerance {
+            return bad("need 0 < level_tolerance <= robot_level_tolerance");
+        }
+        if self.min_level_separation <= 2.0 * self.robot_level_tolerance {
+            return bad("min_level_separation must exceed 2 robot_level_tolerance");
+        }
+        if self.min_stair_rise <= self.level_tolerance {
+            return bad("min_stair_rise must exceed level_tolerance");
+        }
+        if self.portal_radius > 10.0 {
+            return bad("portal_radius must be at most 10 m");
+        }
+        Ok(())
+    }
+}
+
+/// All parameters of a [`crate::FrontierMap`] (and of a
+/// [`crate::MultiLevelMap`], which also reads `levels`).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(default)]
 pub struct FrontierMapConfig {
@@ -222,16 +320,19 @@ pub struct FrontierMapConfig {
     pub frontier: FrontierConfig,
     /// Decision graph.
     pub graph: GraphConfig,
+    /// Floors and stairs (multi-level maps only).
+    pub levels: LevelConfig,
 }
 
 impl FrontierMapConfig {
-    /// Validates all three parts.
+    /// Validates all parts.
     ///
     /// # Errors
     /// The first [`FrontierError::InvalidConfig`] found.
     pub fn validate(&self) -> Result<(), FrontierError> {
         self.grid.validate()?;
         self.frontier.validate()?;
-        self.graph.validate()
+        self.graph.validate()?;
+        self.levels.validate()
     }
 }

@@ -313,5 +313,7 @@ fn make_node(id: FrontierId, cells: Vec<Cell>, res: f64) -> FrontierNode {
         viewpoint: center(&best),
         viewpoint_cell: best,
         cells,
+        level: crate::LevelId(0),
+        z: 0.0,
     }
 }

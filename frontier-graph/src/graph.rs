@@ -1,6 +1,6 @@
 //! The global frontier decision graph G_F = ({v_r, v_h} ∪ V_F, E_F).
 
-use nalgebra::{Point2, Vector2};
+use nalgebra::{Point2, Point3, Vector2};
 use petgraph::graph::{NodeIndex, UnGraph};
 use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
@@ -15,6 +15,15 @@ use crate::Cell;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct FrontierId(pub u64);
 
+/// Identifier of a level (floor) of a multi-level map; level 0 is the floor
+/// the robot started on, further levels are numbered in order of discovery
+/// (their heights are in [`crate::Level`]). A single-level map has only
+/// level 0.
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize,
+)]
+pub struct LevelId(pub u16);
+
 /// A node of G_F.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub enum NodeId {
@@ -24,6 +33,10 @@ pub enum NodeId {
     Home,
     /// A frontier node.
     Frontier(FrontierId),
+    /// A stair portal: the point of a level's traversable grid where a stair
+    /// starts (used inside [`crate::MultiLevelMap`]; never a node of the
+    /// graphs it returns).
+    Portal(u32),
 }
 
 /// A frontier node: a segment of frontier cells (traversable known-free cells
@@ -46,6 +59,20 @@ pub struct FrontierNode {
     pub viewpoint: Point2<f64>,
     /// Grid cell of `viewpoint`.
     pub viewpoint_cell: Cell,
+    /// The level the frontier lies on (0 in a single-level map).
+    #[serde(default)]
+    pub level: LevelId,
+    /// World height (m) of the viewpoint: the floor of its level, or the
+    /// stair surface for the unexplored end of a stair.
+    #[serde(default)]
+    pub z: f64,
+}
+
+impl FrontierNode {
+    /// The viewpoint in 3-D (`z` is the floor it stands on).
+    pub fn viewpoint3(&self) -> Point3<f64> {
+        Point3::new(self.viewpoint.x, self.viewpoint.y, self.z)
+    }
 }
 
 /// The robot or home node.
@@ -57,6 +84,19 @@ pub struct AnchorNode {
     /// nearest traversable cell within [`crate::GraphConfig::snap_radius`].
     /// `None` when there is none (the node then has no edges).
     pub cell: Option<Cell>,
+    /// The level the node is on (0 in a single-level map).
+    #[serde(default)]
+    pub level: LevelId,
+    /// World height (m) of the surface the node stands on.
+    #[serde(default)]
+    pub z: f64,
+}
+
+impl AnchorNode {
+    /// The nominal position in 3-D.
+    pub fn position3(&self) -> Point3<f64> {
+        Point3::new(self.position.x, self.position.y, self.z)
+    }
 }
 
 /// An edge of G_F: an executable path and its cost.
@@ -66,24 +106,54 @@ pub struct Edge {
     pub from: NodeId,
     /// Endpoint the path ends at (the larger [`NodeId`]).
     pub to: NodeId,
-    /// Polyline of cell centres from `from` to `to` (m). Consecutive points
-    /// differ by a multiple of one of the 8 grid directions, and every cell on
-    /// the straight run between them is traversable (no corner cutting), so
-    /// the path is executable by the configured robot. Only direction changes
+    /// 3-D polyline from `from` to `to` (m). On one level it runs through
+    /// cell centres at the level's floor height: consecutive points differ
+    /// by a multiple of one of the 8 grid directions, and every cell on the
+    /// straight run between them is traversable (no corner cutting), so the
+    /// path is executable by the configured robot; only direction changes
     /// are stored; a path between nodes on the same cell has one point.
-    pub path: Vec<Point2<f64>>,
-    /// Path length (m, octile 8-connected), without the displacement term.
+    /// Across levels it continues over the walkable surface of each stair
+    /// (one point per surface cell, at the surface's height).
+    pub path: Vec<Point3<f64>>,
+    /// Path length (m: octile 8-connected on a level, 3-D along stairs),
+    /// without the displacement term and the stair costs.
     pub length: f64,
-    /// Traversal cost w_ij: `length` plus the optional displacement term.
+    /// Traversal cost w_ij from `from` to `to`: `length` plus the optional
+    /// displacement term plus the stair cost of every stair climbed or
+    /// descended on the way.
     pub cost: f64,
+    /// Cost from `to` back to `from` (differs from `cost` only when the
+    /// path uses stairs and climbing and descending cost differently).
+    #[serde(default = "f64_nan")]
+    pub reverse_cost: f64,
     /// Bounding box (min, max) of the path's cells, for change detection.
     pub(crate) bbox: (Cell, Cell),
 }
 
+fn f64_nan() -> f64 {
+    f64::NAN
+}
+
 impl Edge {
+    /// The cost of travelling the edge starting at `start` (one of the
+    /// endpoints); `None` if `start` is not an endpoint.
+    pub fn cost_from(&self, start: NodeId) -> Option<f64> {
+        if start == self.from {
+            Some(self.cost)
+        } else if start == self.to {
+            Some(if self.reverse_cost.is_nan() {
+                self.cost
+            } else {
+                self.reverse_cost
+            })
+        } else {
+            None
+        }
+    }
+
     /// The path oriented to start at `start` (one of the endpoints); `None` if
     /// `start` is not an endpoint.
-    pub fn path_from(&self, start: NodeId) -> Option<Vec<Point2<f64>>> {
+    pub fn path_from(&self, start: NodeId) -> Option<Vec<Point3<f64>>> {
         if start == self.from {
             Some(self.path.clone())
         } else if start == self.to {
@@ -110,6 +180,9 @@ pub struct FrontierGraph {
     pub(crate) robot: Option<AnchorNode>,
     pub(crate) home: Option<AnchorNode>,
     pub(crate) frontiers: BTreeMap<FrontierId, FrontierNode>,
+    /// Stair portals (inside a multi-level map's per-level graphs only).
+    #[serde(default)]
+    pub(crate) portals: BTreeMap<u32, AnchorNode>,
     #[serde(with = "edge_list")]
     pub(crate) edges: FxHashMap<(NodeId, NodeId), Edge>,
 }
@@ -141,6 +214,8 @@ impl FrontierGraph {
         static NONE: AnchorNode = AnchorNode {
             position: Point2::new(0.0, 0.0),
             cell: None,
+            level: LevelId(0),
+            z: 0.0,
         };
         self.robot.as_ref().unwrap_or(&NONE)
     }
@@ -156,14 +231,38 @@ impl FrontierGraph {
             NodeId::Robot => self.robot.as_ref().map(|r| r.position),
             NodeId::Home => self.home.as_ref().map(|h| h.position),
             NodeId::Frontier(f) => self.frontiers.get(&f).map(|n| n.viewpoint),
+            NodeId::Portal(p) => self.portals.get(&p).map(|a| a.position),
         }
     }
 
-    /// All node ids: robot, home (if any), then frontiers by id.
+    /// Nominal 3-D position of a node (robot/home pose, frontier viewpoint
+    /// at its floor height).
+    pub fn position3(&self, id: NodeId) -> Option<Point3<f64>> {
+        match id {
+            NodeId::Robot => self.robot.as_ref().map(AnchorNode::position3),
+            NodeId::Home => self.home.as_ref().map(AnchorNode::position3),
+            NodeId::Frontier(f) => self.frontiers.get(&f).map(FrontierNode::viewpoint3),
+            NodeId::Portal(p) => self.portals.get(&p).map(AnchorNode::position3),
+        }
+    }
+
+    /// The level of a node.
+    pub fn level(&self, id: NodeId) -> Option<LevelId> {
+        match id {
+            NodeId::Robot => self.robot.as_ref().map(|a| a.level),
+            NodeId::Home => self.home.as_ref().map(|a| a.level),
+            NodeId::Frontier(f) => self.frontiers.get(&f).map(|n| n.level),
+            NodeId::Portal(p) => self.portals.get(&p).map(|a| a.level),
+        }
+    }
+
+    /// All node ids: robot, home (if any), then frontiers by id (then
+    /// portals, which only the per-level graphs of a multi-level map have).
     pub fn node_ids(&self) -> impl Iterator<Item = NodeId> + '_ {
         std::iter::once(NodeId::Robot)
             .chain(self.home.as_ref().map(|_| NodeId::Home))
             .chain(self.frontiers.keys().map(|&f| NodeId::Frontier(f)))
+            .chain(self.portals.keys().map(|&p| NodeId::Portal(p)))
     }
 
     /// The edge between `a` and `b` (either order), or `None` when they are
@@ -175,9 +274,11 @@ impl FrontierGraph {
         self.edges.get(&pair(a, b))
     }
 
-    /// Cost of the edge between `a` and `b`, `None` when unreachable.
+    /// Cost of travelling from `a` to `b`, `None` when unreachable. Costs
+    /// are symmetric on one level; over stairs they depend on the direction
+    /// when climbing and descending cost differently.
     pub fn cost(&self, a: NodeId, b: NodeId) -> Option<f64> {
-        self.edge(a, b).map(|e| e.cost)
+        self.edge(a, b).and_then(|e| e.cost_from(a))
     }
 
     /// All edges (each undirected pair once, in arbitrary order).

@@ -9,8 +9,8 @@ use crate::frontier::Detector;
 use crate::graph::pair;
 use crate::search::{Scratch, dijkstra, extract_path};
 use crate::{
-    AnchorNode, Cell, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMapConfig, NodeId,
-    OccupancyGrid,
+    AnchorNode, Cell, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMapConfig, LevelId,
+    NodeId, OccupancyGrid,
 };
 
 /// Relative tolerance when deciding whether a new path may be shorter.
@@ -68,6 +68,12 @@ pub struct FrontierMap {
     next_id: u64,
     pending: Pending,
     last_refresh: RefreshStats,
+    /// The level this map is (0 for a stand-alone map).
+    #[serde(default)]
+    level: LevelId,
+    /// Stair portals requested by [`crate::MultiLevelMap`] (id -> position).
+    #[serde(default)]
+    portal_targets: std::collections::BTreeMap<u32, Point2<f64>>,
     #[serde(skip)]
     scratch: Scratch,
 }
@@ -81,6 +87,10 @@ struct MapData {
     next_id: u64,
     pending: Pending,
     last_refresh: RefreshStats,
+    #[serde(default)]
+    level: LevelId,
+    #[serde(default)]
+    portal_targets: std::collections::BTreeMap<u32, Point2<f64>>,
 }
 
 impl TryFrom<MapData> for FrontierMap {
@@ -118,6 +128,8 @@ impl TryFrom<MapData> for FrontierMap {
             next_id: d.next_id,
             pending: d.pending,
             last_refresh: d.last_refresh,
+            level: d.level,
+            portal_targets: d.portal_targets,
             scratch: Scratch::default(),
         })
     }
@@ -129,16 +141,46 @@ impl FrontierMap {
     /// # Errors
     /// [`FrontierError::InvalidConfig`] if `cfg` is invalid.
     pub fn new(cfg: FrontierMapConfig) -> Result<Self, FrontierError> {
+        Self::for_level(cfg, LevelId(0))
+    }
+
+    /// The map of level `level` of a multi-level map: frontier ids start at
+    /// `level << 40` so that ids of different levels never collide.
+    pub(crate) fn for_level(cfg: FrontierMapConfig, level: LevelId) -> Result<Self, FrontierError> {
         cfg.validate()?;
         Ok(Self {
             grid: OccupancyGrid::new(cfg.grid.clone())?,
             cfg,
             graph: FrontierGraph::default(),
-            next_id: 0,
+            next_id: u64::from(level.0) << 40,
             pending: Pending::default(),
             last_refresh: RefreshStats::default(),
+            level,
+            portal_targets: std::collections::BTreeMap::new(),
             scratch: Scratch::default(),
         })
+    }
+
+    /// The level of this map (0 for a stand-alone map).
+    pub fn level(&self) -> LevelId {
+        self.level
+    }
+
+    /// Sets the stair portals (id, position) of this level; portals whose
+    /// snapped cell changed get their rows recomputed at the next refresh.
+    pub(crate) fn set_portals(&mut self, portals: std::collections::BTreeMap<u32, Point2<f64>>) {
+        self.portal_targets = portals;
+    }
+
+    /// Sets level and height of new frontier nodes.
+    fn stamp_nodes(&mut self, ids: &[FrontierId]) {
+        let (level, z) = (self.level, self.cfg.grid.floor_z);
+        for id in ids {
+            if let Some(n) = self.graph.frontiers.get_mut(id) {
+                n.level = level;
+                n.z = z;
+            }
+        }
     }
 
     /// The configuration.
@@ -212,6 +254,7 @@ impl FrontierMap {
             cfg: &self.cfg.frontier,
         }
         .update(&delta);
+        self.stamp_nodes(&changes.added);
         for id in &changes.removed {
             self.pending.added.remove(id);
         }
@@ -242,6 +285,7 @@ impl FrontierMap {
             cfg: &self.cfg.frontier,
         }
         .rebuild();
+        self.stamp_nodes(&changes.added);
         self.graph.edges.clear();
         self.pending = Pending {
             full: true,
@@ -302,6 +346,7 @@ impl FrontierMap {
                 .frontiers
                 .get(&f)
                 .map(|n| (n.viewpoint_cell, (n.viewpoint - n.centroid).norm())),
+            NodeId::Portal(p) => g.portals.get(&p).and_then(|a| a.cell.map(|c| (c, 0.0))),
         }
     }
 
@@ -335,27 +380,63 @@ impl FrontierMap {
     /// O(V² + E · L) for the change tests (V nodes, E edges of L path cells
     /// near lost cells).
     pub fn frontier_graph(&mut self, robot: &Point2<f64>) -> Result<&FrontierGraph, FrontierError> {
+        Self::check_pose(robot, "pose", self.grid.resolution())?;
+        self.refresh(Some(robot));
+        Ok(&self.graph)
+    }
+
+    /// [`frontier_graph`](Self::frontier_graph) with the robot on this
+    /// level (`Some`) or elsewhere (`None`: no robot node, no home node is
+    /// created). The pose must have been checked.
+    pub(crate) fn refresh(&mut self, robot: Option<&Point2<f64>>) {
         let res = self.grid.resolution();
-        Self::check_pose(robot, "pose", res)?;
         let mut pending = std::mem::take(&mut self.pending);
         let mut stats = RefreshStats::default();
+        let (level, z) = (self.level, self.cfg.grid.floor_z);
 
         // Anchors.
-        if self.cfg.graph.home && self.graph.home.is_none() {
+        if let Some(robot) = robot
+            && self.cfg.graph.home
+            && self.graph.home.is_none()
+        {
             self.graph.home = Some(AnchorNode {
                 position: *robot,
                 cell: None,
+                level,
+                z,
             });
         }
         let mut fresh: Vec<NodeId> = Vec::new();
-        let robot_cell = self.snap(robot);
-        let old_robot = self.graph.robot.replace(AnchorNode {
-            position: *robot,
-            cell: robot_cell,
-        });
+        let robot_cell = robot.and_then(|r| self.snap(r));
+        let old_robot = match robot {
+            Some(r) => self.graph.robot.replace(AnchorNode {
+                position: *r,
+                cell: robot_cell,
+                level,
+                z,
+            }),
+            None => self.graph.robot.take(),
+        };
         if old_robot.as_ref().and_then(|a| a.cell) != robot_cell || old_robot.is_none() {
             fresh.push(NodeId::Robot);
         }
+        // Portals: dropped, moved or new.
+        let targets = std::mem::take(&mut self.portal_targets);
+        self.graph.portals.retain(|id, _| targets.contains_key(id));
+        for (&id, p) in &targets {
+            let cell = self.snap(p);
+            let node = AnchorNode {
+                position: *p,
+                cell,
+                level,
+                z,
+            };
+            match self.graph.portals.insert(id, node) {
+                Some(old) if old.cell == cell => {}
+                _ => fresh.push(NodeId::Portal(id)),
+            }
+        }
+        self.portal_targets = targets;
         if let Some(home) = self.graph.home.as_ref().map(|h| h.position) {
             let hc = self.snap(&home);
             let h = self
@@ -536,14 +617,16 @@ impl FrontierMap {
                         if key.0 != ida {
                             path.reverse();
                         }
+                        let cost = length + w * (da + db);
                         self.graph.edges.insert(
                             key,
                             Edge {
                                 from: key.0,
                                 to: key.1,
-                                path,
+                                path: lift(&path, z),
                                 length,
-                                cost: length + w * (da + db),
+                                cost,
+                                reverse_cost: cost,
                                 bbox,
                             },
                         );
@@ -563,6 +646,7 @@ impl FrontierMap {
                 for (other, _, dother) in &nodes {
                     if let Some(e) = self.graph.edges.get_mut(&pair(NodeId::Robot, *other)) {
                         e.cost = e.length + w * (n.2 + dother);
+                        e.reverse_cost = e.cost;
                     }
                 }
             }
@@ -573,7 +657,6 @@ impl FrontierMap {
         pending.full = false;
         self.pending = pending;
         self.last_refresh = stats;
-        Ok(&self.graph)
     }
 
     /// Shortest executable path between two world points, each snapped to
@@ -605,17 +688,24 @@ impl FrontierMap {
         let Some(d) = self.scratch.settled(ib) else {
             return Ok(None);
         };
+        let z = self.cfg.grid.floor_z;
         Ok(
             extract_path(&self.grid, &self.scratch, ib).map(|(path, bbox)| Edge {
                 from: NodeId::Robot,
                 to: NodeId::Robot,
-                path,
+                path: lift(&path, z),
                 length: d * res,
                 cost: d * res,
+                reverse_cost: d * res,
                 bbox,
             }),
         )
     }
+}
+
+/// Points at height `z`.
+pub(crate) fn lift(points: &[Point2<f64>], z: f64) -> Vec<Point3<f64>> {
+    points.iter().map(|p| Point3::new(p.x, p.y, z)).collect()
 }
 
 /// Rank of every node along the principal axis of the node cells.
@@ -666,13 +756,14 @@ fn path_crosses(e: &Edge, cells: &FxHashSet<Cell>, res: f64) -> bool {
     false
 }
 
-/// Every cell of a path polyline as stored in [`Edge::path`] (consecutive
-/// points differ by a multiple of one of the 8 grid directions), in order.
+/// Every cell of a one-level path polyline as stored in [`Edge::path`]
+/// (consecutive points differ by a multiple of one of the 8 grid
+/// directions; heights are ignored), in order.
 ///
 /// # Complexity
 /// O(L) for a path of L cells (lazy iterator).
-pub fn path_cells(path: &[Point2<f64>], resolution: f64) -> impl Iterator<Item = Cell> + '_ {
-    let to_cell = move |p: &Point2<f64>| {
+pub fn path_cells(path: &[Point3<f64>], resolution: f64) -> impl Iterator<Item = Cell> + '_ {
+    let to_cell = move |p: &Point3<f64>| {
         // Path points are cell centres produced by this crate.
         #[allow(clippy::cast_possible_truncation)]
         Cell::new(

@@ -92,6 +92,7 @@ fn costs_by_cells(map: &FrontierMap) -> BTreeMap<(Vec<Cell>, Vec<Cell>), u64> {
             NodeId::Frontier(f) => g.frontier(f).unwrap().cells.clone(),
             NodeId::Robot => vec![Cell::new(i32::MIN, 0)],
             NodeId::Home => vec![Cell::new(i32::MIN, 1)],
+            NodeId::Portal(p) => vec![Cell::new(i32::MIN, 2 + p as i32)],
         }
     };
     g.edges()
@@ -167,6 +168,7 @@ proptest! {
                 NodeId::Robot => g.robot().cell,
                 NodeId::Home => g.home().and_then(|h| h.cell),
                 NodeId::Frontier(f) => g.frontier(f).map(|n| n.viewpoint_cell),
+                NodeId::Portal(_) => None,
             }
         };
         for (k, &a) in ids.iter().enumerate() {
@@ -183,8 +185,8 @@ proptest! {
                     (Some(d), Some(e)) => {
                         prop_assert!((e.cost - d).abs() < 1e-6, "{:?}-{:?}: {} vs {}", a, b, e.cost, d);
                         let oriented = e.path_from(a).unwrap();
-                        prop_assert_eq!(grid.cell_of(&oriented[0]).unwrap(), ca);
-                        prop_assert_eq!(grid.cell_of(oriented.last().unwrap()).unwrap(), cell_of(b).unwrap());
+                        prop_assert_eq!(grid.cell_of(&oriented[0].xy()).unwrap(), ca);
+                        prop_assert_eq!(grid.cell_of(&oriented.last().unwrap().xy()).unwrap(), cell_of(b).unwrap());
                         let cells: Vec<Cell> = path_cells(&e.path, res).collect();
                         for w in cells.windows(2) {
                             let (dx, dy) = (w[1].x - w[0].x, w[1].y - w[0].y);

@@ -366,6 +366,7 @@ fn default_config_incremental_equals_rebuild_through_a_door_closing() {
             NodeId::Frontier(f) => Some(m.graph().frontier(f).unwrap().viewpoint_cell),
             NodeId::Robot => m.graph().robot().cell,
             NodeId::Home => m.graph().home().and_then(|h| h.cell),
+            NodeId::Portal(_) => None,
         };
         let costs = |m: &FrontierMap| {
             m.graph()

@@ -11,7 +11,7 @@ use sornav_executor::{
     FrontierId as ExecFrontierId, Mission, MissionId, MissionKind, MissionOutcome, MissionStatus,
     MotionError, MotionStack, ObjectId as ExecObjectId, RobotPose, Submission,
 };
-use sornav_frontier_graph::{FrontierGraph, FrontierId, FrontierMap, NodeId};
+use sornav_frontier_graph::{FrontierGraph, FrontierId, LevelId, MultiLevelMap, NodeId};
 use sornav_semantic_map::{DepthFrame, LabelId, SemanticMap};
 use sornav_supervisor::{
     Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject, ContextPolicy,
@@ -123,7 +123,7 @@ pub struct Agent {
     /// Normalised category of each label id (`None`: structure / unnamed).
     categories: BTreeMap<LabelId, Option<String>>,
     semantic: SemanticMap,
-    frontiers: FrontierMap,
+    frontiers: MultiLevelMap,
     supervisor: Supervisor<BoxedPolicy, Duration>,
     executor: Executor<Outbox, StepClock>,
     target: Option<TargetState>,
@@ -166,25 +166,26 @@ fn supervisor_kind(kind: &MissionKind) -> SupKind {
     }
 }
 
-fn lift(points: &[Point2<f64>], z: f64) -> Vec<Point3<f64>> {
-    points.iter().map(|p| Point3::new(p.x, p.y, z)).collect()
+/// G_F's executable 3-D path from the robot to frontier `id`, if any.
+fn robot_path(graph: &FrontierGraph, id: FrontierId) -> Option<Vec<Point3<f64>>> {
+    graph
+        .edge(NodeId::Robot, NodeId::Frontier(id))
+        .and_then(|e| e.path_from(NodeId::Robot))
+        .filter(|p| !p.is_empty())
 }
 
-/// The explore mission toward frontier `id` with G_F's executable path.
-fn explore_mission(graph: &FrontierGraph, id: FrontierId, z: f64) -> Option<Mission> {
+/// The explore mission toward frontier `id` with G_F's executable path
+/// (over stairs when the frontier is on another level).
+fn explore_mission(graph: &FrontierGraph, id: FrontierId) -> Option<Mission> {
     let node = graph.frontier(id)?;
     let mission = Mission::new(
         MissionKind::Explore {
             frontier: ExecFrontierId(id.0),
         },
-        Point3::new(node.viewpoint.x, node.viewpoint.y, z),
+        node.viewpoint3(),
     );
-    let path = graph
-        .edge(NodeId::Robot, NodeId::Frontier(id))
-        .and_then(|e| e.path_from(NodeId::Robot))
-        .filter(|p| !p.is_empty());
-    Some(match path {
-        Some(p) => mission.with_path(lift(&p, z)),
+    Some(match robot_path(graph, id) {
+        Some(p) => mission.with_path(p),
         None => mission,
     })
 }
@@ -208,13 +209,29 @@ fn footprint_points(pose: &RobotPose, radius: f64, resolution: f64, points: &mut
     }
 }
 
-/// S_r and the top-K candidate clusters (Algorithm 1's inputs).
+/// The floor of `level` relative to the robot's at height `z`: how many
+/// known floors lie between them (+1: the next floor up).
+fn relative_floor(levels: &BTreeMap<LevelId, f64>, level: LevelId, z: f64) -> i32 {
+    let Some(&h) = levels.get(&level) else {
+        return 0;
+    };
+    // Floors at or below a height (a robot half-way up a stair is on the
+    // floor it left).
+    let rank = |at: f64| {
+        let n = levels.values().filter(|&&f| f <= at + 0.5).count();
+        i32::try_from(n).unwrap_or(i32::MAX)
+    };
+    rank(h) - rank(z)
+}
+
+/// S_r and the top-K candidate clusters (Algorithm 1's inputs); each
+/// candidate carries its floor relative to the robot's.
 fn region_context(
     cg: &ClusterGraph<FrontierId>,
     graph: &FrontierGraph,
     objects: &[ObjectSummary],
     excluded: &BTreeSet<FrontierId>,
-    z: f64,
+    floors: &dyn Fn(LevelId) -> i32,
 ) -> RegionContext {
     let local_context = cg
         .robot_context(objects)
@@ -231,7 +248,7 @@ fn region_context(
             if excluded.contains(&reloc.waypoint) {
                 return None;
             }
-            let viewpoint = graph.frontier(reloc.waypoint)?.viewpoint;
+            let node = graph.frontier(reloc.waypoint)?;
             let context = cg.cluster_context(k, objects).ok()?;
             Some(ClusterCandidate {
                 candidate: Candidate {
@@ -242,9 +259,10 @@ fn region_context(
                         .into_iter()
                         .map(|o| CandidateObject::new(o.label, o.support as f64, o.distance))
                         .collect(),
+                    floor: floors(node.level),
                 },
                 u_geo: cluster.utility,
-                waypoint: Point3::new(viewpoint.x, viewpoint.y, z),
+                waypoint: node.viewpoint3(),
             })
         })
         .collect();
@@ -290,7 +308,7 @@ impl Agent {
                 .map(|(_, name)| name),
         );
         let semantic = SemanticMap::new(config.semantic_map, labels)?;
-        let frontiers = FrontierMap::new(config.frontier.clone())?;
+        let frontiers = MultiLevelMap::new(config.frontier.clone())?;
         let supervisor = Supervisor::new(policy, config.supervisor.clone())?;
         let executor = Executor::new(config.executor, Outbox, StepClock::default())?;
         Ok(Self {
@@ -331,9 +349,24 @@ impl Agent {
         &self.semantic
     }
 
-    /// The frontier map (occupancy grid, frontiers, G_F).
-    pub fn frontier_map(&self) -> &FrontierMap {
+    /// The frontier map (levels, stairs, and per level occupancy and
+    /// frontiers; G_F across levels).
+    pub fn frontier_map(&self) -> &MultiLevelMap {
         &self.frontiers
+    }
+
+    /// The level the robot stands on (`None` on a stair or before the
+    /// first observation).
+    pub fn current_level(&self) -> Option<LevelId> {
+        self.pose.and_then(|p| self.frontiers.level_at(p.position.z))
+    }
+
+    /// Whether the robot can stand at `feet` on the agent's own map: a
+    /// traversable cell of that level, the approach to a stair, or a
+    /// stair's walkable surface (see
+    /// [`MultiLevelMap::is_traversable`]).
+    pub fn is_traversable(&self, feet: &Point3<f64>) -> bool {
+        self.frontiers.is_traversable(feet)
     }
 
     /// The current target.
@@ -439,7 +472,7 @@ impl Agent {
             self.config.frontier.grid.resolution,
             &mut points,
         );
-        let update = match self.frontiers.update(&origin, &points) {
+        let update = match self.frontiers.update(&observation.pose.position, &origin, &points) {
             Ok(u) => u,
             Err(e) => {
                 self.stats.refused_observations += 1;
@@ -777,14 +810,20 @@ impl Agent {
 
         // 3. G_F, G_C and the route.
         let z = pose.position.z;
-        let robot_xy = Point2::new(pose.position.x, pose.position.y);
         let objects = self.object_summaries();
         let category = self
             .target
             .as_ref()
             .map(|t| t.target.category.clone())
             .unwrap_or_default();
-        let graph = self.frontiers.frontier_graph(&robot_xy)?;
+        self.frontiers.frontier_graph(&pose.position)?;
+        // Read after the refresh, which may have found new levels.
+        let levels: BTreeMap<LevelId, f64> = self
+            .frontiers
+            .levels()
+            .map(|l| (l.id, l.floor_z))
+            .collect();
+        let graph = self.frontiers.graph();
         if let Some((_, m)) = self.executor.active()
             && let MissionKind::Explore { frontier } = m.kind
             && graph.frontier(FrontierId(frontier.0)).is_none()
@@ -804,7 +843,6 @@ impl Agent {
             &OrderingInput {
                 graph,
                 excluded: &self.excluded,
-                robot_z: z,
                 target: &category,
                 objects: &objects,
                 n_min: self.config.cluster.n_min,
@@ -832,13 +870,12 @@ impl Agent {
             target: &category,
             target_accepted,
             mission,
-            first_frontier: route
-                .as_ref()
-                .map(|r| Point3::new(r.first_viewpoint.x, r.first_viewpoint.y, z)),
+            first_frontier: route.as_ref().map(|r| r.first_viewpoint),
         };
         let excluded = &self.excluded;
+        let floors = |l: LevelId| relative_floor(&levels, l, z);
         let command = self.supervisor.step(now, &input, || {
-            region_context(&cg, graph, &objects, excluded, z)
+            region_context(&cg, graph, &objects, excluded, &floors)
         })?;
 
         // 5. Decision -> mission -> command.
@@ -847,7 +884,7 @@ impl Agent {
             (
                 SupervisorCommand::Explore { .. } | SupervisorCommand::ExploreNewRegion { .. },
                 Some(r),
-            ) => explore_mission(graph, r.first, z),
+            ) => explore_mission(graph, r.first),
             _ => None,
         };
         let relocation = match &command {
@@ -855,12 +892,12 @@ impl Agent {
                 usize::try_from(*cluster_id).ok().and_then(|k| {
                     let cluster = cg.cluster(sornav_cluster_graph::ClusterId(k))?;
                     let reloc = cluster.relocation.as_ref()?;
-                    let vp = graph.frontier(reloc.waypoint)?.viewpoint;
+                    let vp = graph.frontier(reloc.waypoint)?.viewpoint3();
                     Some((
                         cluster.members.clone(),
                         reloc.waypoint,
-                        Point3::new(vp.x, vp.y, z),
-                        lift(&reloc.path, z),
+                        vp,
+                        robot_path(graph, reloc.waypoint).unwrap_or_default(),
                     ))
                 })
             }
@@ -987,31 +1024,36 @@ impl Agent {
             return Ok(AgentCommand::Continue { mission: None });
         };
         let (lo, hi) = bounds.unwrap_or((centre, centre));
-        let robot = Point2::new(pose.position.x, pose.position.y);
-        let approach = approach_waypoint(
-            &mut self.frontiers,
-            robot,
-            (Point2::new(lo.x, lo.y), Point2::new(hi.x, hi.y)),
-            &self.config.approach,
-        )?;
-        let z = pose.position.z;
+        // The object's level: the floor below its lowest point.
+        let level = self.frontiers.level_containing(lo.z);
+        let approach = match level {
+            Some(level) => approach_waypoint(
+                &mut self.frontiers,
+                pose.position,
+                level,
+                (Point2::new(lo.x, lo.y), Point2::new(hi.x, hi.y)),
+                &self.config.approach,
+            )?,
+            None => None,
+        };
         match approach {
             Some((waypoint, path)) => {
                 let mission = Mission::new(
                     MissionKind::NavToObject {
                         object: ExecObjectId(target_id),
                     },
-                    Point3::new(waypoint.x, waypoint.y, z),
+                    waypoint,
                 )
                 .with_look_at(centre);
                 self.dispatch(
                     now,
                     mission,
-                    lift(&path, z),
+                    path,
                     "nav_to_object",
                     format!("candidate {target_id} has N_obs supporting observations"),
                 )
             }
+            None if self.unmapped_floor(&lo, &hi) => self.explore_toward_floor(now, target_id, &lo),
             None => {
                 self.stats.unreachable_candidates += 1;
                 if let Some(state) = self.target.as_mut() {
@@ -1049,12 +1091,79 @@ impl Agent {
         from: &Point3<f64>,
         to: &Point3<f64>,
     ) -> Result<Option<Vec<Point3<f64>>>, AgentError> {
-        let a = Point2::new(from.x, from.y);
-        let b = Point2::new(to.x, to.y);
-        Ok(self
-            .frontiers
-            .path(&a, &b)?
-            .map(|edge| lift(&edge.path, from.z)))
+        Ok(self.frontiers.path(from, to)?.map(|edge| edge.path))
+    }
+
+    /// Whether an object with bounds `[lo, hi]` stands on a floor the agent
+    /// has not mapped: above the highest known floor or below the lowest
+    /// by at least half the minimum level separation (seen up or down a
+    /// stairwell).
+    fn unmapped_floor(&self, lo: &Point3<f64>, hi: &Point3<f64>) -> bool {
+        let half = self.config.frontier.levels.min_level_separation / 2.0;
+        let floors: Vec<f64> = self.frontiers.levels().map(|l| l.floor_z).collect();
+        let top = floors.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        let bottom = floors.iter().copied().fold(f64::INFINITY, f64::min);
+        self.config.frontier.levels.allow_stairs
+            && (lo.z >= top + half || hi.z <= bottom - half)
+    }
+
+    /// A candidate on an unmapped floor is approached over the stairs: the
+    /// open stair end whose height is nearest to the object is explored
+    /// (the candidate is kept). When no stair leads there, the candidate is
+    /// rejected like any unreachable one.
+    fn explore_toward_floor(
+        &mut self,
+        now: Duration,
+        target_id: u64,
+        lo: &Point3<f64>,
+    ) -> Result<AgentCommand, AgentError> {
+        let graph = self.frontiers.graph();
+        let best = graph
+            .nodes()
+            .filter(|n| self.frontiers.is_stair_frontier(n.id) && !self.excluded.contains(&n.id))
+            .filter(|n| graph.cost(NodeId::Robot, NodeId::Frontier(n.id)).is_some())
+            .min_by(|a, b| (a.z - lo.z).abs().total_cmp(&(b.z - lo.z).abs()))
+            .map(|n| n.id);
+        let mission = best.and_then(|id| explore_mission(graph, id));
+        match mission {
+            Some(mission) => {
+                if self
+                    .executor
+                    .active()
+                    .is_some_and(|(_, m)| m.kind == mission.kind)
+                {
+                    return Ok(self.keep_going(
+                        now,
+                        DecisionStep::TargetAccepted,
+                        format!("candidate {target_id} is on another floor: climbing the stairs"),
+                    ));
+                }
+                self.dispatch_as(
+                    now,
+                    DecisionStep::TargetAccepted,
+                    mission,
+                    Vec::new(),
+                    "explore",
+                    format!("candidate {target_id} is on another floor: taking the stairs to it"),
+                )
+            }
+            None => {
+                self.stats.unreachable_candidates += 1;
+                if let Some(state) = self.target.as_mut() {
+                    let _ = state.gate.on_approach_failed(ObjectId(target_id));
+                }
+                self.decide(
+                    now,
+                    DecisionStep::TargetAccepted,
+                    "reject_candidate",
+                    None,
+                    format!("candidate {target_id}: on another floor and no stair leads there"),
+                );
+                Ok(AgentCommand::Continue {
+                    mission: self.executor.active().map(|(id, _)| id),
+                })
+            }
+        }
     }
 
     /// Objects of the semantic map with their normalised categories.
@@ -1067,6 +1176,10 @@ impl Agent {
                     label,
                     support: c.support,
                     centre: c.centre,
+                    level: self
+                        .frontiers
+                        .level_containing(c.bounds.min.z)
+                        .map(|l| l.0),
                 })
             })
             .collect()
@@ -1082,7 +1195,11 @@ impl Agent {
             target: self.target.as_ref().map(|t| t.target.clone()),
             pose: self.pose,
             at: self.last_step,
-            occupancy: OccupancyRaster::from_grid(self.frontiers.grid()),
+            occupancy: self
+                .frontiers
+                .level_map(self.current_level().unwrap_or_default())
+                .map(|m| OccupancyRaster::from_grid(m.grid()))
+                .unwrap_or_default(),
             objects: self
                 .semantic
                 .clusters()

@@ -1,12 +1,12 @@
 //! Placing a `NAV_TO_OBJECT` waypoint next to a target candidate.
 
-use nalgebra::Point2;
-use sornav_frontier_graph::{FrontierError, FrontierMap};
+use nalgebra::{Point2, Point3};
+use sornav_frontier_graph::{FrontierError, LevelId, MultiLevelMap};
 
 use crate::config::ApproachConfig;
 
-/// A waypoint and the executable path to it.
-pub(crate) type Approach = (Point2<f64>, Vec<Point2<f64>>);
+/// A waypoint (on its level's floor) and the executable path to it.
+pub(crate) type Approach = (Point3<f64>, Vec<Point3<f64>>);
 
 /// Horizontal distance from `p` to the rectangle `[lo, hi]` (0 inside).
 pub(crate) fn distance_to_box(p: &Point2<f64>, lo: &Point2<f64>, hi: &Point2<f64>) -> f64 {
@@ -37,9 +37,10 @@ pub(crate) fn line_of_sight(
     })
 }
 
-/// A traversable waypoint within `[min_standoff_m, standoff_m]` of the
-/// object's horizontal bounds `(lo, hi)` that the robot can reach, with its
-/// executable path.
+/// A traversable waypoint on `level` within `[min_standoff_m, standoff_m]`
+/// of the object's horizontal bounds `(lo, hi)` that the robot (feet at
+/// `robot`, on any level) can reach, with its executable path (over stairs
+/// when the object is on another level).
 ///
 /// # Algorithm
 /// Points on a `sample_step_m` lattice around the bounds are kept when
@@ -48,18 +49,24 @@ pub(crate) fn line_of_sight(
 /// With `line_of_sight`, the points that see the bounds on the occupancy
 /// grid ([`line_of_sight`]) are used when there are any. The
 /// `max_path_queries` candidates nearest to the robot (Euclidean) are
-/// tried with the frontier map's exact shortest path; the one with the
-/// shortest path wins. `Ok(None)` when none is reachable.
+/// tried with the frontier map's exact shortest path (through the level's
+/// grid and the stairs); the one with the shortest path wins. `Ok(None)`
+/// when none is reachable or the level is unknown.
 ///
 /// # Complexity
 /// O(S) for S lattice samples plus `max_path_queries` shortest-path
 /// searches (each O(N) in the traversable cells).
 pub(crate) fn approach_waypoint(
-    map: &mut FrontierMap,
-    robot: Point2<f64>,
+    map: &mut MultiLevelMap,
+    robot: Point3<f64>,
+    level: LevelId,
     (lo, hi): (Point2<f64>, Point2<f64>),
     config: &ApproachConfig,
 ) -> Result<Option<Approach>, FrontierError> {
+    let Some(level_map) = map.level_map(level) else {
+        return Ok(None);
+    };
+    let floor = level_map.config().grid.floor_z;
     let step = config.sample_step_m;
     let reach = config.standoff_m;
     let nx = ((hi.x - lo.x + 2.0 * reach) / step)
@@ -68,7 +75,7 @@ pub(crate) fn approach_waypoint(
     let ny = ((hi.y - lo.y + 2.0 * reach) / step)
         .ceil()
         .clamp(0.0, 4000.0) as usize;
-    let grid = map.grid();
+    let grid = level_map.grid();
     let mut samples = Vec::new();
     for i in 0..=nx {
         for j in 0..=ny {
@@ -98,10 +105,12 @@ pub(crate) fn approach_waypoint(
             samples = seeing;
         }
     }
-    samples.sort_by(|a, b| (a - robot).norm().total_cmp(&(b - robot).norm()));
+    let robot2 = robot.xy();
+    samples.sort_by(|a, b| (a - robot2).norm().total_cmp(&(b - robot2).norm()));
     samples.truncate(config.max_path_queries);
-    let mut best: Option<(f64, Point2<f64>, Vec<Point2<f64>>)> = None;
+    let mut best: Option<(f64, Point3<f64>, Vec<Point3<f64>>)> = None;
     for p in samples {
+        let p = Point3::new(p.x, p.y, floor);
         if let Some(edge) = map.path(&robot, &p)?
             && best.as_ref().is_none_or(|(len, _, _)| edge.length < *len)
         {
@@ -120,8 +129,8 @@ mod tests {
 
     /// A closed 8 m x 6 m room scanned from the origin, with a box
     /// obstacle `(lo, hi)`.
-    fn room_with_box(lo: Point2<f64>, hi: Point2<f64>) -> FrontierMap {
-        let mut map = FrontierMap::new(FrontierMapConfig::default()).unwrap();
+    fn room_with_box(lo: Point2<f64>, hi: Point2<f64>) -> MultiLevelMap {
+        let mut map = MultiLevelMap::new(FrontierMapConfig::default()).unwrap();
         let mut points = Vec::new();
         for k in 0..1440 {
             let t = f64::from(k) * std::f64::consts::PI / 720.0;
@@ -153,8 +162,13 @@ mod tests {
             let r = hit_box.unwrap_or(f64::INFINITY).min(tx.min(ty));
             points.push(Point3::new(r * c, r * s, 0.5));
         }
-        map.update(&Point3::new(0.0, 0.0, 0.5), &points).unwrap();
+        map.update(&Point3::origin(), &Point3::new(0.0, 0.0, 0.5), &points)
+            .unwrap();
         map
+    }
+
+    fn grid(map: &MultiLevelMap) -> &sornav_frontier_graph::OccupancyGrid {
+        map.level_map(LevelId(0)).unwrap().grid()
     }
 
     #[test]
@@ -163,7 +177,7 @@ mod tests {
         let (blo, bhi) = (Point2::new(1.5, -0.5), Point2::new(1.7, 0.5));
         let map = room_with_box(blo, bhi);
         let (lo, hi) = (Point2::new(2.5, -0.2), Point2::new(2.9, 0.2));
-        let grid = map.grid();
+        let grid = grid(&map);
         assert!(!line_of_sight(grid, &Point2::new(1.2, 0.0), &lo, &hi));
         assert!(line_of_sight(grid, &Point2::new(2.6, 1.2), &lo, &hi));
         // The occluder's own cells never block a view of the occluder.
@@ -186,17 +200,17 @@ mod tests {
         ) {
             let (lo, hi) = (Point2::new(x, y), Point2::new(x + w, y + h));
             let mut map = room_with_box(lo, hi);
-            let robot = Point2::origin();
+            let robot = Point3::origin();
             let config = ApproachConfig::default();
             let unlimited = ApproachConfig { max_path_queries: usize::MAX, ..config };
-            let limited = approach_waypoint(&mut map, robot, (lo, hi), &config).unwrap();
-            let best = approach_waypoint(&mut map, robot, (lo, hi), &unlimited).unwrap();
+            let limited = approach_waypoint(&mut map, robot, LevelId(0), (lo, hi), &config).unwrap();
+            let best = approach_waypoint(&mut map, robot, LevelId(0), (lo, hi), &unlimited).unwrap();
             let (Some((p, path)), Some((q, _))) = (limited, best) else {
                 return Err(TestCaseError::fail("the object's near side is free"));
             };
-            prop_assert!(distance_to_box(&p, &lo, &hi) <= config.standoff_m + 1e-9);
-            let cell = map.grid().cell_of(&p).unwrap();
-            prop_assert!(map.grid().is_traversable(cell));
+            prop_assert!(distance_to_box(&p.xy(), &lo, &hi) <= config.standoff_m + 1e-9);
+            let cell = grid(&map).cell_of(&p.xy()).unwrap();
+            prop_assert!(grid(&map).is_traversable(cell));
             prop_assert!((path[0] - robot).norm() <= 0.1);
             prop_assert!((path[path.len() - 1] - p).norm() <= 0.1);
             // Brute force: every lattice sample, exact path length.
@@ -211,18 +225,18 @@ mod tests {
                     if distance_to_box(&s, &lo, &hi) > reach {
                         continue;
                     }
-                    let c = map.grid().cell_of(&s).unwrap();
-                    if !map.grid().is_traversable(c) {
+                    let c = grid(&map).cell_of(&s).unwrap();
+                    if !grid(&map).is_traversable(c) {
                         continue;
                     }
                     // The room holds no other obstacle: every sample sees the box.
-                    prop_assert!(line_of_sight(map.grid(), &s, &lo, &hi));
-                    if let Some(e) = map.path(&robot, &s).unwrap() {
+                    prop_assert!(line_of_sight(grid(&map), &s, &lo, &hi));
+                    if let Some(e) = map.path(&robot, &Point3::new(s.x, s.y, 0.0)).unwrap() {
                         brute = brute.min(e.length);
                     }
                 }
             }
-            let len = |p: &Point2<f64>, map: &mut FrontierMap| map.path(&robot, p).unwrap().unwrap().length;
+            let len = |p: &Point3<f64>, map: &mut MultiLevelMap| map.path(&robot, p).unwrap().unwrap().length;
             prop_assert!((len(&q, &mut map) - brute).abs() < 1e-9);
             prop_assert!(len(&p, &mut map) >= brute - 1e-9);
         }

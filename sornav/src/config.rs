@@ -135,17 +135,21 @@ pub enum Variant {
     NearestFrontier,
     /// No gate, greedy semantic frontier ranking.
     SemanticRanking,
+    /// SOR-Nav on one floor: stairs off (`levels.allow_stairs = false`),
+    /// the agent of a robot that cannot climb.
+    SingleFloor,
     /// The simulator's ground-truth oracle (upper bound); not an agent.
     Oracle,
 }
 
 impl Variant {
-    /// All five, in the evaluation's order.
-    pub const ALL: [Variant; 5] = [
+    /// All six, in the evaluation's order.
+    pub const ALL: [Variant; 6] = [
         Variant::Sornav,
         Variant::NoGate,
         Variant::NearestFrontier,
         Variant::SemanticRanking,
+        Variant::SingleFloor,
         Variant::Oracle,
     ];
 
@@ -156,6 +160,7 @@ impl Variant {
             Variant::NoGate => "no-gate",
             Variant::NearestFrontier => "nearest-frontier",
             Variant::SemanticRanking => "semantic-ranking",
+            Variant::SingleFloor => "single-floor",
             Variant::Oracle => "oracle",
         }
     }
@@ -300,9 +305,10 @@ impl AgentConfig {
     }
 
     /// This configuration turned into an evaluation variant: only the
-    /// context policy and the frontier ordering change. For
-    /// [`Variant::Sornav`] the configured policy is kept (commonsense by
-    /// default, or an LLM policy).
+    /// context policy, the frontier ordering and (for
+    /// [`Variant::SingleFloor`]) `frontier.levels.allow_stairs` change. For
+    /// [`Variant::Sornav`] and [`Variant::SingleFloor`] the configured policy
+    /// is kept (commonsense by default, or an LLM policy).
     ///
     /// # Errors
     /// [`ConfigError::NotAnAgentVariant`] for [`Variant::Oracle`].
@@ -313,6 +319,13 @@ impl AgentConfig {
                     self.policy = PolicyConfig::default();
                 }
                 self.ordering = FrontierOrdering::Tsp;
+            }
+            Variant::SingleFloor => {
+                if self.policy == PolicyConfig::NeverRelocate {
+                    self.policy = PolicyConfig::default();
+                }
+                self.ordering = FrontierOrdering::Tsp;
+                self.frontier.levels.allow_stairs = false;
             }
             Variant::NoGate => {
                 self.policy = PolicyConfig::NeverRelocate;

@@ -22,8 +22,8 @@ pub struct Route {
     pub order: Vec<FrontierId>,
     /// The frontier to explore now.
     pub first: FrontierId,
-    /// Its executable viewpoint.
-    pub first_viewpoint: Point2<f64>,
+    /// Its executable viewpoint (on the floor it stands on).
+    pub first_viewpoint: Point3<f64>,
     /// Whether the replacement rule swapped a nearby frontier in (TSP only).
     pub replaced: bool,
     /// Route cost from the robot (TSP), or the first leg's cost.
@@ -33,7 +33,7 @@ pub struct Route {
 /// A reachable, admissible frontier: id, viewpoint, centroid, robot cost.
 struct Reachable {
     id: FrontierId,
-    viewpoint: Point2<f64>,
+    viewpoint: Point3<f64>,
     centroid: Point2<f64>,
     cost: f64,
 }
@@ -46,7 +46,7 @@ fn reachable(graph: &FrontierGraph, excluded: &BTreeSet<FrontierId>) -> Vec<Reac
             let cost = graph.cost(NodeId::Robot, NodeId::Frontier(f.id))?;
             cost.is_finite().then_some(Reachable {
                 id: f.id,
-                viewpoint: f.viewpoint,
+                viewpoint: f.viewpoint3(),
                 centroid: f.centroid,
                 cost,
             })
@@ -58,7 +58,6 @@ fn reachable(graph: &FrontierGraph, excluded: &BTreeSet<FrontierId>) -> Vec<Reac
 pub(crate) struct OrderingInput<'a> {
     pub graph: &'a FrontierGraph,
     pub excluded: &'a BTreeSet<FrontierId>,
-    pub robot_z: f64,
     pub target: &'a str,
     pub objects: &'a [ObjectSummary],
     pub n_min: usize,
@@ -116,14 +115,13 @@ fn tsp(
                 .unwrap_or(a.cost + b.cost)
         }
     })?;
-    let robot = input.graph.robot().position;
     let problem = HorizonProblem {
-        robot: Point3::new(robot.x, robot.y, input.robot_z),
+        robot: input.graph.robot().position3(),
         frontiers: cands
             .iter()
             .map(|c| HorizonFrontier {
                 id: c.id,
-                position: Point3::new(c.viewpoint.x, c.viewpoint.y, input.robot_z),
+                position: c.viewpoint,
             })
             .collect(),
         costs,
@@ -244,7 +242,6 @@ mod tests {
         OrderingInput {
             graph,
             excluded,
-            robot_z: 0.0,
             target: "toilet",
             objects,
             n_min: 10,

@@ -59,8 +59,12 @@ pub struct Candidate {
     pub cluster_id: u64,
     /// Graph distance `d_k` from the robot to the cluster, metres. Finite and `>= 0`.
     pub distance_m: f64,
-    /// The cluster's semantic context `S_k`.
+    /// The cluster's semantic context `S_k` (objects of its own floor).
     pub context: Vec<CandidateObject>,
+    /// The cluster's floor relative to the robot's: 0 the same floor, +1
+    /// the next floor up, -1 the next floor down (multi-level maps).
+    #[serde(default)]
+    pub floor: i32,
 }
 
 /// Everything a [`ContextPolicy`](crate::ContextPolicy) sees: the target `g`,

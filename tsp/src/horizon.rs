@@ -41,10 +41,12 @@ impl Default for ReplacementRule {
 }
 
 impl ReplacementRule {
-    /// Whether a frontier at Euclidean `distance` from the robot, reached
-    /// with cost `nearby_leg`, replaces a planned first frontier reached with
-    /// cost `first_leg`: `distance <= radius && first_leg > leg_ratio *
-    /// nearby_leg`.
+    /// Whether a frontier at `distance` from the robot, reached with cost
+    /// `nearby_leg`, replaces a planned first frontier reached with cost
+    /// `first_leg`: `distance <= radius && first_leg > leg_ratio *
+    /// nearby_leg`. [`RecedingHorizon::plan`] measures `distance` as the
+    /// path cost from the robot (`nearby_leg` itself), never as a straight
+    /// line: a frontier 2 m away through a floor or a wall is not nearby.
     ///
     /// # Examples
     /// ```
@@ -79,7 +81,8 @@ impl ReplacementRule {
 pub struct HorizonFrontier<Id> {
     /// Stable identifier (for example frontier-graph's frontier id).
     pub id: Id,
-    /// Position (metres), used only for the replacement rule's radius.
+    /// Position (metres). Informational (reports, drawings): the planner
+    /// reads only the cost matrix, the replacement rule included.
     pub position: Point3<f64>,
 }
 
@@ -224,7 +227,9 @@ impl RecedingHorizon {
             .collect();
         let planned = tour.order[1];
         let first_leg = problem.costs.cost(0, planned);
-        let distance = |v: usize| (problem.frontiers[v - 1].position - r).norm();
+        // "Nearby" by path cost: a frontier behind a wall or on another
+        // floor is not near, however close in a straight line.
+        let distance = |v: usize| problem.costs.cost(0, v);
         let nearby = (1..=k)
             .filter(|&v| distance(v) <= self.rule.radius)
             .min_by(|&a, &b| {

@@ -1,0 +1,441 @@
+//! Stairs: chains of walkable steps joining levels, extracted from the
+//! walkable-surface map.
+//!
+//! # Algorithm
+//! 1. Every walkable surface of every column is a *node*; a node within
+//!    `level_tolerance` of a level's floor is *on* that level, the others
+//!    are *off-level* (treads, landings, furniture tops, floors of levels
+//!    not yet known).
+//! 2. Two nodes of 8-neighbouring columns are *step-connected* when their
+//!    heights differ by at most the robot's step height. Off-level nodes
+//!    are grouped into step-connected components (union-find); a component
+//!    is *attached* to a level when one of its nodes is step-connected to a
+//!    node on that level (a *foot*).
+//! 3. A node is *walkable* when every column within the robot radius holds
+//!    a surface within two step heights of it: the robot's footprint is
+//!    supported (walls, railings, drop-offs and unobserved columns beside
+//!    a stair erode it).
+//! 4. An attached component is a **stair** when it joins two levels (the
+//!    shortest walkable chain from a foot on the lower level to a foot on
+//!    the upper one, by Dijkstra over 3-D step lengths), or when from its
+//!    one level it climbs or descends at least `min_stair_rise` over
+//!    walkable nodes (a partly seen stair: its far end is the walkable node
+//!    farthest in height from the level; exploring it reveals more). A
+//!    sheer drop is never step-connected, so it stays an obstacle; furniture
+//!    tops are not attached (their edge is higher than a step).
+//! 5. Inside attached components, a flat area of at least `min_level_area`
+//!    at least `min_level_separation` away from every known floor is a new
+//!    level (the floor at the top or bottom of a stair).
+//!
+//! # Complexity
+//! O(S log S) for S walkable surfaces (sorting for determinism; the
+//! union-find and Dijkstra are near-linear), run when the surface map has
+//! changed.
+//!
+//! # Limits
+//! Ramps steeper than a step per column are not stairs (gentle ramps are:
+//! any step-connected chain is); spiral stairs work while their walkable
+//! width survives the erosion; elevators and ladders are not modelled.
+
+use std::cmp::Reverse;
+use std::collections::{BTreeMap, BinaryHeap};
+
+use nalgebra::Point3;
+use petgraph::unionfind::UnionFind;
+use rustc_hash::FxHashMap;
+use serde::{Deserialize, Serialize};
+
+use crate::LevelId;
+use crate::surface::{ColumnKey, SurfaceMap};
+
+/// One end of a [`Stair`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StairEnd {
+    /// The level this end reaches; `None` for the unexplored end of a
+    /// partly seen stair.
+    pub level: Option<LevelId>,
+    /// Where the end is: a point of the level's floor next to the first
+    /// step, or the last walkable step seen.
+    pub position: Point3<f64>,
+}
+
+/// A stair of a [`crate::MultiLevelMap`].
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Stair {
+    /// The lower end.
+    pub lower: StairEnd,
+    /// The upper end.
+    pub upper: StairEnd,
+    /// Walkable 3-D polyline from `lower` to `upper` (one point per surface
+    /// column, at the surface's height).
+    pub path: Vec<Point3<f64>>,
+    /// Length of `path` (m, 3-D).
+    pub length: f64,
+    /// Walkable surface columns of the stair with their heights (sorted).
+    pub(crate) columns: Vec<(ColumnKey, f32)>,
+}
+
+impl Stair {
+    /// Whether both ends reach a level.
+    pub fn is_complete(&self) -> bool {
+        self.lower.level.is_some() && self.upper.level.is_some()
+    }
+
+    /// The unexplored end of a partly seen stair.
+    pub fn open_end(&self) -> Option<&StairEnd> {
+        if self.lower.level.is_none() {
+            Some(&self.lower)
+        } else if self.upper.level.is_none() {
+            Some(&self.upper)
+        } else {
+            None
+        }
+    }
+
+    /// Whether `p` stands on the stair's walkable surface: a walkable
+    /// column of the stair (or one of its 8 neighbours) whose surface is
+    /// within `dz` of `p.z`.
+    pub(crate) fn supports(&self, key: ColumnKey, z: f64, dz: f64) -> bool {
+        (-1..=1).any(|dx| {
+            (-1..=1).any(|dy| {
+                let k = (key.0 + dx, key.1 + dy);
+                let a = self.columns.partition_point(|c| c.0 < k);
+                self.columns[a..]
+                    .iter()
+                    .take_while(|c| c.0 == k)
+                    .any(|c| (f64::from(c.1) - z).abs() <= dz)
+            })
+        })
+    }
+}
+
+/// Robot and level parameters of an extraction.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Params {
+    pub step: f32,
+    pub clearance: f32,
+    pub radius: f64,
+    pub level_tolerance: f32,
+    pub min_level_separation: f64,
+    pub min_level_area: f64,
+    pub min_stair_rise: f64,
+}
+
+/// What [`extract`] found.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Extraction {
+    pub stairs: Vec<Stair>,
+    /// Heights of new levels (flat areas over stairs).
+    pub new_levels: Vec<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Kind {
+    On(usize),
+    Off(usize),
+}
+
+const DIRS8: [(i32, i32); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (1, -1),
+    (-1, 1),
+    (-1, -1),
+];
+
+/// Extracts stairs and new levels from `map` given the floor heights of the
+/// known levels (index = level id).
+pub(crate) fn extract(map: &SurfaceMap, levels: &[f64], p: &Params) -> Extraction {
+    let res = map.resolution;
+    // 1. Nodes.
+    let mut keys: Vec<ColumnKey> = map.columns.keys().copied().collect();
+    keys.sort_unstable();
+    let mut col_nodes: FxHashMap<ColumnKey, Vec<(f32, Kind)>> = FxHashMap::default();
+    let mut off: Vec<(ColumnKey, f32)> = Vec::new();
+    for &k in &keys {
+        let mut v = Vec::new();
+        for z in map.surfaces(k, p.clearance) {
+            let on = levels
+                .iter()
+                .enumerate()
+                .filter(|(_, h)| (f64::from(z) - **h).abs() <= f64::from(p.level_tolerance))
+                .min_by(|a, b| (f64::from(z) - a.1).abs().total_cmp(&(f64::from(z) - b.1).abs()))
+                .map(|(l, _)| l);
+            match on {
+                Some(l) => v.push((z, Kind::On(l))),
+                None => {
+                    v.push((z, Kind::Off(off.len())));
+                    off.push((k, z));
+                }
+            }
+        }
+        if !v.is_empty() {
+            col_nodes.insert(k, v);
+        }
+    }
+    if off.is_empty() {
+        return Extraction::default();
+    }
+    // 2. Components and attachments.
+    let mut uf = UnionFind::<usize>::new(off.len());
+    // (node, level, on-level column)
+    let mut feet: Vec<(usize, usize, ColumnKey)> = Vec::new();
+    for (i, &(k, z)) in off.iter().enumerate() {
+        for (dx, dy) in DIRS8 {
+            let n = (k.0 + dx, k.1 + dy);
+            let Some(v) = col_nodes.get(&n) else { continue };
+            for &(z2, kind) in v {
+                if (z2 - z).abs() > p.step {
+                    continue;
+                }
+                match kind {
+                    Kind::Off(j) => {
+                        uf.union(i, j);
+                    }
+                    Kind::On(l) => feet.push((i, l, n)),
+                }
+            }
+        }
+    }
+    let mut comps: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for i in 0..off.len() {
+        comps.entry(uf.find(i)).or_default().push(i);
+    }
+    let mut comp_feet: BTreeMap<usize, Vec<(usize, usize, ColumnKey)>> = BTreeMap::new();
+    for f in feet {
+        comp_feet.entry(uf.find(f.0)).or_default().push(f);
+    }
+    // 3. Walkable nodes (footprint supported).
+    let r = p.radius / res;
+    // Bounded: radius is at most 200 grid cells (GridConfig) and the
+    // surface resolution at least 0.02 m.
+    #[allow(clippy::cast_possible_truncation)]
+    let ri = r.ceil() as i32;
+    let disk: Vec<(i32, i32)> = (-ri..=ri)
+        .flat_map(|dy| (-ri..=ri).map(move |dx| (dx, dy)))
+        .filter(|&(dx, dy)| f64::from(dx * dx + dy * dy) <= r * r + 1e-9)
+        .collect();
+    let supported = |k: ColumnKey, z: f32| {
+        disk.iter().all(|&(dx, dy)| {
+            col_nodes
+                .get(&(k.0 + dx, k.1 + dy))
+                .is_some_and(|v| v.iter().any(|(z2, _)| (z2 - z).abs() <= 2.0 * p.step))
+        })
+    };
+    let cell_area = res * res;
+    let mut out = Extraction::default();
+    for (root, members) in &comps {
+        let Some(cf) = comp_feet.get(root) else {
+            continue;
+        };
+        // 5. New levels: flat areas far from every floor.
+        let mut zs: Vec<f32> = members.iter().map(|&i| off[i].1).collect();
+        zs.sort_unstable_by(f32::total_cmp);
+        let mut a = 0;
+        for b in 0..zs.len() {
+            while zs[b] - zs[a] > 2.0 * p.level_tolerance {
+                a += 1;
+            }
+            let count = b - a + 1;
+            if count as f64 * cell_area >= p.min_level_area {
+                let h = f64::from(zs[(a + b) / 2]);
+                let far = levels
+                    .iter()
+                    .chain(out.new_levels.iter())
+                    .all(|l| (l - h).abs() >= p.min_level_separation);
+                if far {
+                    out.new_levels.push(h);
+                }
+            }
+        }
+        // 3-4. Walkable chain.
+        let walk: FxHashMap<(ColumnKey, u32), usize> = members
+            .iter()
+            .filter(|&&i| supported(off[i].0, off[i].1))
+            .map(|&i| ((off[i].0, off[i].1.to_bits()), i))
+            .collect();
+        if walk.is_empty() {
+            continue;
+        }
+        let mut attached: Vec<usize> = cf.iter().map(|f| f.1).collect();
+        attached.sort_unstable();
+        attached.dedup();
+        attached.sort_by(|&a, &b| levels[a].total_cmp(&levels[b]));
+        let start_level = attached[0];
+        let goal_level = (attached.len() > 1).then(|| attached[attached.len() - 1]);
+        if let Some(stair) = chain(
+            &off,
+            &walk,
+            &col_nodes,
+            cf,
+            levels,
+            start_level,
+            goal_level,
+            map,
+            p,
+        ) {
+            out.stairs.push(stair);
+        }
+    }
+    out.stairs.sort_by(|a, b| {
+        (a.lower.position.x, a.lower.position.y, a.lower.position.z)
+            .partial_cmp(&(b.lower.position.x, b.lower.position.y, b.lower.position.z))
+            .unwrap_or(std::cmp::Ordering::Equal)
+    });
+    out
+}
+
+fn point(map: &SurfaceMap, k: ColumnKey, z: f64) -> Point3<f64> {
+    let (x, y) = map.center(k);
+    Point3::new(x, y, z)
+}
+
+/// Dijkstra over the walkable nodes of one component from the feet on
+/// `start` to the feet on `goal` (or to the node farthest in height from
+/// `start` when there is no goal level).
+#[allow(clippy::too_many_arguments)]
+fn chain(
+    off: &[(ColumnKey, f32)],
+    walk: &FxHashMap<(ColumnKey, u32), usize>,
+    col_nodes: &FxHashMap<ColumnKey, Vec<(f32, Kind)>>,
+    feet: &[(usize, usize, ColumnKey)],
+    levels: &[f64],
+    start: usize,
+    goal: Option<usize>,
+    map: &SurfaceMap,
+    p: &Params,
+) -> Option<Stair> {
+    let node_point = |i: usize| point(map, off[i].0, f64::from(off[i].1));
+    // Dijkstra state keyed by node index.
+    let mut dist: FxHashMap<usize, f64> = FxHashMap::default();
+    // parent: Ok(node) or Err(level column the chain starts from)
+    let mut parent: FxHashMap<usize, Result<usize, ColumnKey>> = FxHashMap::default();
+    let mut heap = BinaryHeap::new();
+    let key = |d: f64| Reverse(ordered(d));
+    let hs = levels[start];
+    for &(i, l, col) in feet {
+        if l != start || !walk.contains_key(&(off[i].0, off[i].1.to_bits())) {
+            continue;
+        }
+        let d = (node_point(i) - point(map, col, hs)).norm();
+        if dist.get(&i).is_none_or(|&old| d < old) {
+            dist.insert(i, d);
+            parent.insert(i, Err(col));
+            heap.push((key(d), i));
+        }
+    }
+    let goal_feet: FxHashMap<usize, ColumnKey> = goal
+        .map(|g| {
+            feet.iter()
+                .filter(|f| f.1 == g)
+                .map(|f| (f.0, f.2))
+                .collect()
+        })
+        .unwrap_or_default();
+    let mut best_end: Option<(usize, f64)> = None;
+    let mut reached_goal: Option<(usize, ColumnKey)> = None;
+    let mut done: FxHashMap<usize, ()> = FxHashMap::default();
+    while let Some((Reverse(d), i)) = heap.pop() {
+        let d = d.0;
+        if done.insert(i, ()).is_some() {
+            continue;
+        }
+        if let Some(&col) = goal_feet.get(&i) {
+            reached_goal = Some((i, col));
+            break;
+        }
+        let rise = (f64::from(off[i].1) - hs).abs();
+        if best_end.is_none_or(|(b, _)| rise > (f64::from(off[b].1) - hs).abs() + 1e-6) {
+            best_end = Some((i, d));
+        }
+        let (k, z) = off[i];
+        for (dx, dy) in DIRS8 {
+            let n = (k.0 + dx, k.1 + dy);
+            let Some(v) = col_nodes.get(&n) else { continue };
+            for &(z2, kind) in v {
+                let Kind::Off(j) = kind else { continue };
+                if (z2 - z).abs() > p.step || !walk.contains_key(&(n, z2.to_bits())) {
+                    continue;
+                }
+                let nd = d + (node_point(j) - node_point(i)).norm();
+                if dist.get(&j).is_none_or(|&old| nd < old) {
+                    dist.insert(j, nd);
+                    parent.insert(j, Ok(i));
+                    heap.push((key(nd), j));
+                }
+            }
+        }
+    }
+    let (end, end_col) = match (reached_goal, goal) {
+        (Some((i, col)), Some(_)) => (i, Some(col)),
+        _ => {
+            let (i, _) = best_end?;
+            if (f64::from(off[i].1) - hs).abs() < p.min_stair_rise {
+                return None;
+            }
+            (i, None)
+        }
+    };
+    // Reconstruct.
+    let mut rev = Vec::new();
+    if let Some(col) = end_col {
+        rev.push(point(map, col, levels[goal.unwrap_or(start)]));
+    }
+    let mut i = end;
+    let start_col = loop {
+        rev.push(node_point(i));
+        match parent.get(&i) {
+            Some(Ok(j)) => i = *j,
+            Some(Err(col)) => break *col,
+            None => return None,
+        }
+    };
+    rev.push(point(map, start_col, hs));
+    rev.reverse();
+    let length = rev.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+    let mut columns: Vec<(ColumnKey, f32)> = walk.keys().map(|(k, z)| (*k, f32::from_bits(*z))).collect();
+    columns.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
+    let first = rev[0];
+    let last = *rev.last()?;
+    let start_end = StairEnd {
+        level: Some(LevelId(u16::try_from(start).ok()?)),
+        position: first,
+    };
+    let far_end = StairEnd {
+        level: match goal {
+            Some(g) if end_col.is_some() => Some(LevelId(u16::try_from(g).ok()?)),
+            _ => None,
+        },
+        position: last,
+    };
+    let (lower, upper, path) = if last.z >= first.z {
+        (start_end, far_end, rev)
+    } else {
+        let mut path = rev;
+        path.reverse();
+        (far_end, start_end, path)
+    };
+    Some(Stair {
+        lower,
+        upper,
+        path,
+        length,
+        columns,
+    })
+}
+
+/// Total order on finite path lengths for the heap.
+#[derive(Debug, Clone, Copy, PartialEq, PartialOrd)]
+struct Ordered(f64);
+impl Eq for Ordered {}
+impl Ord for Ordered {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}
+fn ordered(d: f64) -> Ordered {
+    Ordered(d)
+}
