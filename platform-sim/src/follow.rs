@@ -593,7 +593,7 @@ mod tests {
             drive(&mut f, &mut robot, &corridor, &corridor, &|_| 0.0, 80);
         assert!(reached, "{traj:?}");
         assert!(actions < 40, "{actions}");
-        assert!(traj.iter().all(|p| corridor(p)));
+        assert!(traj.iter().all(corridor));
     }
 
     #[test]
