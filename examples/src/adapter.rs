@@ -7,16 +7,12 @@
 //!
 //! * **Start**: `scan_turns` (12) TURN_LEFT actions, observing after each,
 //!   so the agent has seen all around before its first decision.
-//! * **Missions** become actions by following the mission's executable path
-//!   on the agent's own traversability map (pure pursuit): the target is the
-//!   point `lookahead_m` further along the path than the robot's closest
-//!   path point; of the headings reachable by turning, the one whose forward
-//!   move stays on the agent's traversable cells and ends nearest the target
-//!   is chosen — MOVE_FORWARD when it is the current heading, otherwise a
-//!   turn toward it. The path is re-planned on the agent's map every
-//!   `replan_every` actions and after every collision (the map changes as
-//!   the robot sees more). A forward move that collides is remembered and
-//!   not tried again from the same place; after `max_collisions` collisions
+//! * **Missions** become actions with platform-sim's
+//!   [`WaypointFollower`]: pure pursuit along the mission's executable path
+//!   on the agent's own traversability map (the forward move must stay on
+//!   the agent's traversable cells), collision memory, re-planning on the
+//!   agent's map every `replan_every` actions and after every collision (the
+//!   map changes as the robot sees more); after `max_collisions` collisions
 //!   without progress the mission is reported stuck (the agent then
 //!   excludes its frontier or rejects its candidate).
 //! * **Verification**: on [`AgentCommand::Verify`] the camera is turned
@@ -33,7 +29,7 @@
 //! read. Coordinates are the world's with `z` measured from the start
 //! floor, so the agent's 2-D grid sits on the floor it starts on.
 
-use std::collections::{BTreeMap, HashSet};
+use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
 use nalgebra::{Point2, Point3};
@@ -44,6 +40,7 @@ use sornav::{
     Agent, AgentCommand, AgentConfig, AgentError, BoxedPolicy, DepthObservation, LabelEntry,
     Observation, Sensor,
 };
+use sornav_platform_sim::follow::{FollowerConfig, MoveOutcome, WaypointFollower};
 use sornav_platform_sim::render::NO_INSTANCE;
 use sornav_platform_sim::{Action, Episode, InstanceKind, Policy, Scene, Simulator};
 
@@ -73,6 +70,22 @@ pub struct AdapterConfig {
     pub replan_every: usize,
     /// Collisions without progress before the mission is reported blocked.
     pub max_collisions: usize,
+}
+
+impl AdapterConfig {
+    /// The follower settings of this configuration (traversability
+    /// samples at half the agent map's `resolution`).
+    pub fn follower(&self, resolution: f64) -> FollowerConfig {
+        FollowerConfig {
+            heading_tolerance_deg: self.heading_tolerance_deg,
+            path_point_radius_m: self.path_point_radius_m,
+            lookahead_m: self.lookahead_m,
+            replan_every: self.replan_every,
+            max_collisions: self.max_collisions,
+            sample_spacing_m: resolution / 2.0,
+            ..FollowerConfig::default()
+        }
+    }
 }
 
 impl Default for AdapterConfig {
@@ -252,18 +265,6 @@ pub struct EpisodeTrace {
     pub missions: usize,
 }
 
-/// The mission being executed.
-#[derive(Debug, Clone)]
-struct ActiveMission {
-    id: MissionId,
-    waypoint: Point3<f64>,
-    look_at: Option<Point3<f64>>,
-    path: Vec<Point2<f64>>,
-    next: usize,
-    planned_at: usize,
-    collisions: usize,
-}
-
 /// SOR-Nav on platform-sim: a [`Policy`] around the [`Agent`].
 pub struct SornavPolicy<F> {
     factory: F,
@@ -273,14 +274,12 @@ pub struct SornavPolicy<F> {
     camera: Option<(PinholeCamera, f64)>,
     target: String,
     floor_z: f64,
-    mission: Option<ActiveMission>,
-    blocked: HashSet<(i32, i32, i32)>,
-    last: Option<(Point3<f64>, f64, Action)>,
+    /// The mission being followed (the follower has its goal).
+    mission: Option<MissionId>,
+    follower: WaypointFollower,
     last_act_end: Option<Instant>,
     exhausted_turns: usize,
-    turn_rad: f64,
     turns: i32,
-    forward_m: f64,
     trace: EpisodeTrace,
     /// `SORNAV_DEBUG` is set: log every dispatch to stderr.
     debug: bool,
@@ -309,6 +308,10 @@ fn f32x3(p: &Point3<f64>) -> [f32; 3] {
 impl<F: AgentFactory> SornavPolicy<F> {
     /// A policy that builds its agent with `factory` at every episode start.
     pub fn new(factory: F, config: AdapterConfig) -> Self {
+        let follower = WaypointFollower::new(
+            config.follower(0.05),
+            &sornav_platform_sim::AgentConfig::default(),
+        );
         Self {
             factory,
             config,
@@ -318,13 +321,10 @@ impl<F: AgentFactory> SornavPolicy<F> {
             target: String::new(),
             floor_z: 0.0,
             mission: None,
-            blocked: HashSet::new(),
-            last: None,
+            follower,
             last_act_end: None,
             exhausted_turns: 0,
-            turn_rad: 30f64.to_radians(),
             turns: 12,
-            forward_m: 0.25,
             trace: EpisodeTrace::default(),
             debug: std::env::var_os("SORNAV_DEBUG").is_some(),
         }
@@ -378,14 +378,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
     /// Turn (the shorter way) toward a heading error; `None` when within
     /// the tolerance.
     fn turn_toward(&self, error: f64) -> Option<Action> {
-        let tol = self.config.heading_tolerance_deg.to_radians();
-        if error.abs() <= tol {
-            None
-        } else if error > 0.0 {
-            Some(Action::TurnLeft)
-        } else {
-            Some(Action::TurnRight)
-        }
+        self.follower.turn_toward(error)
     }
 
     fn report(&mut self, id: MissionId, reason: FailureReason) {
@@ -394,227 +387,98 @@ impl<F: AgentFactory> SornavPolicy<F> {
             // The agent may have moved on already (unknown mission): fine.
             let _ = agent.on_mission_outcome(id, MissionStatus::Failed(reason));
         }
+        self.drop_mission();
+    }
+
+    fn drop_mission(&mut self) {
         self.mission = None;
+        self.follower.clear_goal();
     }
 
     fn replan(&mut self, from: &Point3<f64>, step: usize) {
-        let Some(m) = self.mission.as_mut() else {
+        let Some(id) = self.mission else {
             return;
         };
         let Some(agent) = self.agent.as_mut() else {
             return;
         };
-        m.planned_at = step;
-        match agent.plan_path(from, &m.waypoint) {
-            Ok(Some(path)) => {
-                m.path = path.iter().map(|p| Point2::new(p.x, p.y)).collect();
-                m.next = 0;
-            }
+        let Some(waypoint) = self.follower.waypoint() else {
+            return;
+        };
+        match agent.plan_path(from, &waypoint) {
+            Ok(Some(path)) => self.follower.replanned(step, Some(path)),
             Ok(None) => {
                 // Not connected on the agent's map (any more).
-                let id = m.id;
+                self.follower.replanned(step, None);
                 self.report(id, FailureReason::PathInvalidated);
             }
-            Err(e) => self.error("plan_path", &e),
+            Err(e) => {
+                self.follower.replanned(step, None);
+                self.error("plan_path", &e);
+            }
         }
     }
 
     /// Adopts a dispatched or continued mission.
     fn adopt(&mut self, id: MissionId, step: usize) {
-        if self.mission.as_ref().is_some_and(|m| m.id == id) {
+        if self.mission == Some(id) {
             return;
         }
         let Some((active, mission)) = self.agent.as_ref().and_then(|a| a.active_mission()) else {
-            self.mission = None;
+            self.drop_mission();
             return;
         };
         if active != id {
-            self.mission = None;
+            self.drop_mission();
             return;
         }
         self.trace.missions += 1;
-        let path: Vec<Point2<f64>> = mission
-            .path
-            .as_ref()
-            .map(|p| p.iter().map(|q| Point2::new(q.x, q.y)).collect())
-            .unwrap_or_default();
-        self.mission = Some(ActiveMission {
-            id,
-            waypoint: mission.waypoint,
-            look_at: mission.look_at,
-            path,
-            next: 0,
-            planned_at: step,
-            collisions: 0,
-        });
+        let (waypoint, look_at) = (mission.waypoint, mission.look_at);
+        let path = mission.path.clone().unwrap_or_default();
+        self.mission = Some(id);
+        self.follower.set_goal(waypoint, look_at, path, step);
     }
 
     /// One action toward the active mission's waypoint.
     fn follow(&mut self, feet: &Point3<f64>, yaw: f64, step: usize) -> Action {
-        let stale = self
-            .mission
-            .as_ref()
-            .is_some_and(|m| m.path.is_empty() || step >= m.planned_at + self.config.replan_every);
-        if stale {
+        if self.follower.needs_replan(step) {
             self.replan(feet, step);
         }
-        let Some(m) = self.mission.as_mut() else {
+        if !self.follower.has_goal() {
             // No mission: look around (observing) until the agent decides.
             return Action::TurnLeft;
-        };
-        let here = Point2::new(feet.x, feet.y);
-        let goal = Point2::new(m.waypoint.x, m.waypoint.y);
-        if (goal - here).norm() < self.config.path_point_radius_m {
-            // At the waypoint; the agent detects arrival from the pose. A
-            // NAV_TO_OBJECT mission must also face its object.
-            if let Some(look) = m.look_at {
-                let e = wrap((look.y - here.y).atan2(look.x - here.x) - yaw);
-                if let Some(turn) = self.turn_toward(e) {
-                    return turn;
-                }
-            }
-            return Action::TurnLeft;
         }
-        let target = lookahead(&m.path, &mut m.next, &here, goal, self.config.lookahead_m);
         let Some(agent) = self.agent.as_ref() else {
             return Action::Stop;
         };
         let resolution = agent.config().frontier.grid.resolution;
-        let heading = |k: i32| yaw + f64::from(k) * self.turn_rad;
-        let cell = |p: &Point2<f64>| {
-            let (x, y) = ((p.x / resolution).floor(), (p.y / resolution).floor());
-            (x.is_finite() && y.is_finite()).then_some((x as i64, y as i64))
-        };
-        // The forward segment must stay on the agent's traversable map
-        // (its own level's grid, a stair approach or a stair's surface; the
+        let cell = |x: f64, y: f64| ((x / resolution).floor(), (y / resolution).floor());
+        // The forward segment must stay on the agent's traversable map: its
+        // level's grid, the approach to a stair or a stair's surface (the
         // start cell may be inside the inflation margin).
-        let samples = (self.forward_m / (resolution / 2.0)).ceil().max(1.0) as usize;
-        let start_cell = cell(&here);
-        let mut best: Option<(f64, i32)> = None;
-        for k in -(self.turns / 2 - 1)..=(self.turns / 2) {
-            let (s, c) = heading(k).sin_cos();
-            let end = here + nalgebra::Vector2::new(c, s) * self.forward_m;
-            let key = blocked_key(&here, heading(k));
-            if self.blocked.contains(&key) {
-                continue;
-            }
-            let free = (1..=samples).all(|i| {
-                let q = here + (end - here) * (i as f64 / samples as f64);
-                cell(&q).is_some_and(|cq| {
-                    Some(cq) == start_cell || agent.is_traversable(&Point3::new(q.x, q.y, feet.z))
-                })
-            });
-            if !free {
-                continue;
-            }
-            let score = (target - end).norm() + 0.01 * f64::from(k.abs());
-            if best.is_none_or(|(b, _)| score < b) {
-                best = Some((score, k));
-            }
-        }
-        match best {
-            Some((_, 0)) => Action::MoveForward,
-            Some((_, k)) if k > 0 => Action::TurnLeft,
-            Some(_) => Action::TurnRight,
-            // Boxed in on the agent's map (inside an inflation margin, or
-            // every heading blocked before): head for the target directly.
-            None => {
-                let d = target - here;
-                let e = wrap(d.y.atan2(d.x) - yaw);
-                self.turn_toward(e).unwrap_or(Action::MoveForward)
-            }
-        }
+        let start_cell = cell(feet.x, feet.y);
+        let traversable = |q: &Point3<f64>| {
+            cell(q.x, q.y) == start_cell || agent.is_traversable(q)
+        };
+        self.follower.config_mut().sample_spacing_m = resolution / 2.0;
+        self.follower.next_action(feet, yaw, &traversable)
     }
 
     /// Bookkeeping of the previous action's effect (collisions).
     fn after_last_action(&mut self, feet: &Point3<f64>, step: usize) {
-        let Some((before, before_yaw, action)) = self.last else {
-            return;
-        };
-        if action != Action::MoveForward {
-            return;
-        }
-        let blocked = (feet - before).norm() < 1e-6;
-        if !blocked {
-            if let Some(m) = self.mission.as_mut() {
-                m.collisions = 0;
+        match self.follower.after_action(feet) {
+            MoveOutcome::NotForward | MoveOutcome::Advanced => {}
+            MoveOutcome::Blocked { stuck } => {
+                self.trace.collisions += 1;
+                if stuck {
+                    if let Some(id) = self.mission {
+                        self.report(id, FailureReason::Stuck { progress_m: 0.0 });
+                    }
+                } else {
+                    // Re-plan on the updated map.
+                    self.replan(feet, step);
+                }
             }
-            return;
-        }
-        self.trace.collisions += 1;
-        // Remember the blocked move so that it is not tried again.
-        self.blocked
-            .insert(blocked_key(&Point2::new(before.x, before.y), before_yaw));
-        let max = self.config.max_collisions;
-        let Some(m) = self.mission.as_mut() else {
-            return;
-        };
-        m.collisions += 1;
-        let (k, id) = (m.collisions, m.id);
-        if k >= max {
-            self.report(id, FailureReason::Stuck { progress_m: 0.0 });
-            return;
-        }
-        // Re-plan on the updated map.
-        self.replan(feet, step);
-    }
-}
-
-/// Key of a (position, heading) move for the blocked-move memory: the
-/// position on a 5 cm lattice and the heading in 10-degree sectors.
-fn blocked_key(p: &Point2<f64>, heading: f64) -> (i32, i32, i32) {
-    let sector = (wrap(heading).to_degrees() / 10.0).round() as i32;
-    (
-        (p.x / 0.05).round() as i32,
-        (p.y / 0.05).round() as i32,
-        sector.rem_euclid(36),
-    )
-}
-
-/// The pure-pursuit target on `path`: the point `lookahead` metres further
-/// along the path than the path point closest to `here` (searched from
-/// segment `next` on; `next` advances), or `goal` beyond the path's end.
-fn lookahead(
-    path: &[Point2<f64>],
-    next: &mut usize,
-    here: &Point2<f64>,
-    goal: Point2<f64>,
-    lookahead: f64,
-) -> Point2<f64> {
-    if path.len() < 2 {
-        return goal;
-    }
-    // Closest point on the remaining segments (bounded search window).
-    let first = (*next).min(path.len() - 2);
-    let mut best = (f64::INFINITY, first, 0.0);
-    for i in first..(path.len() - 1).min(first + 8) {
-        let (a, b) = (path[i], path[i + 1]);
-        let ab = b - a;
-        let len2 = ab.norm_squared();
-        let t = if len2 > 0.0 {
-            ((here - a).dot(&ab) / len2).clamp(0.0, 1.0)
-        } else {
-            0.0
-        };
-        let d = (a + ab * t - here).norm();
-        if d < best.0 {
-            best = (d, i, t);
-        }
-    }
-    let (_, mut i, t) = best;
-    *next = i;
-    let mut at = path[i] + (path[i + 1] - path[i]) * t;
-    let mut left = lookahead;
-    loop {
-        let seg = (path[i + 1] - at).norm();
-        if seg >= left {
-            return at + (path[i + 1] - at) * (left / seg.max(1e-12));
-        }
-        left -= seg;
-        at = path[i + 1];
-        i += 1;
-        if i + 1 >= path.len() {
-            return if (goal - at).norm() <= left { goal } else { at };
         }
     }
 }
@@ -630,14 +494,12 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         self.trace = EpisodeTrace::default();
         self.floor_z = episode.start_position.z;
         self.mission = None;
-        self.blocked.clear();
-        self.last = None;
+        self.follower.reset();
         self.last_act_end = None;
         self.exhausted_turns = 0;
         let motion = &sim.config().agent;
-        self.turn_rad = motion.turn_deg.to_radians();
+        self.follower.set_motion(motion);
         self.turns = (360.0 / motion.turn_deg).round().max(2.0) as i32;
-        self.forward_m = motion.forward_step;
         self.target = episode.object_category.clone();
         self.agent = match self.factory.build(labels.entries()) {
             Ok(mut agent) => match agent.set_target(&episode.object_category) {
@@ -664,7 +526,7 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         let feet = self.to_local(&obs.position);
         self.after_last_action(&feet, step);
         let action = self.decide(obs, &feet, step);
-        self.last = Some((feet, obs.yaw, action));
+        self.follower.record(&feet, obs.yaw, action);
         self.last_act_end = Some(Instant::now());
         action
     }
@@ -733,7 +595,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
                         last
                     );
                 }
-                self.mission = None;
+                self.drop_mission();
                 self.adopt(id, step);
                 self.follow(feet, yaw, step)
             }
@@ -742,11 +604,11 @@ impl<F: AgentFactory> SornavPolicy<F> {
                 self.follow(feet, yaw, step)
             }
             AgentCommand::Continue { mission: None } => {
-                self.mission = None;
+                self.drop_mission();
                 Action::TurnLeft
             }
             AgentCommand::Verify { look_at, .. } => {
-                self.mission = None;
+                self.drop_mission();
                 self.trace.verifications.push((step, f32x3(&look_at)));
                 // Face the candidate; when already facing it, turn toward
                 // its side (it stays within half the 79-degree field of

@@ -40,7 +40,7 @@ use plotters::prelude::*;
 
 use sornav_platform_sim::Outcome;
 
-use crate::summary::{DISTANCE_BINS, VariantSummary};
+use crate::summary::{DISTANCE_BINS, FLOOR_BINS, VariantSummary, wilson};
 
 const PALETTE: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
@@ -111,7 +111,57 @@ pub(crate) fn legend<'a, 'b: 'a>(
         .map_err(FigureError::draw)
 }
 
-/// Grouped bars of SR, SPL, soft SPL and SR@1m (%) per variant.
+/// One bar of [`grouped_bars`]: value and optional interval (both in %).
+type Bar = (f64, Option<(f64, f64)>);
+
+/// Grouped bars: one group per label, one bar per series (name, bars),
+/// with error bars where an interval is given.
+fn grouped_bars(
+    path: &Path,
+    caption: &str,
+    labels: &[&str],
+    series: &[(String, Vec<Bar>)],
+    y: std::ops::Range<f64>,
+    y_desc: &str,
+) -> Result<(), FigureError> {
+    register_font();
+    let root = BitMapBackend::new(path, (900, 480)).into_drawing_area();
+    let mut chart = frame(&root, caption, labels, y, y_desc)?;
+    let width = 0.8 / series.len().max(1) as f64;
+    for (k, (name, bars)) in series.iter().enumerate() {
+        let c = colour(k);
+        let x0 = |m: usize| m as f64 + 0.1 + k as f64 * width + 0.5 * width - 0.5 * width * 0.9;
+        chart
+            .draw_series(bars.iter().enumerate().map(|(m, (v, _))| {
+                Rectangle::new([(x0(m), 0.0), (x0(m) + width * 0.9, *v)], c.filled())
+            }))
+            .map_err(FigureError::draw)?
+            .label(name.clone())
+            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], c.filled()));
+        chart
+            .draw_series(bars.iter().enumerate().filter_map(|(m, (v, ci))| {
+                let (lo, hi) = (*ci)?;
+                Some(ErrorBar::new_vertical(
+                    x0(m) + width * 0.45,
+                    lo,
+                    *v,
+                    hi,
+                    BLACK.stroke_width(1),
+                    6,
+                ))
+            }))
+            .map_err(FigureError::draw)?;
+    }
+    legend(&mut chart, 0.9, 13)?;
+    root.present().map_err(FigureError::draw)
+}
+
+fn pct_ci(ci: (f64, f64)) -> Option<(f64, f64)> {
+    Some((100.0 * ci.0, 100.0 * ci.1))
+}
+
+/// Grouped bars of SR, SPL, soft SPL and SR@1m (%) per variant, with
+/// Wilson 95 % error bars on the rates (SR, SR@1m).
 ///
 /// # Errors
 /// [`FigureError`] when `summaries` is empty or drawing fails.
@@ -119,38 +169,69 @@ pub fn metrics_bars(path: &Path, summaries: &[VariantSummary]) -> Result<(), Fig
     if summaries.is_empty() {
         return Err(FigureError::Empty("metrics chart"));
     }
-    register_font();
-    type Metric = (&'static str, fn(&VariantSummary) -> f64);
-    let metrics: [Metric; 4] = [
-        ("SR", |v| v.success_rate),
-        ("SPL", |v| v.spl),
-        ("soft SPL", |v| v.soft_spl),
-        ("SR@1m", |v| v.success_rate_1m),
-    ];
-    let root = BitMapBackend::new(path, (900, 480)).into_drawing_area();
-    let n = summaries.len() as f64;
-    let labels: Vec<&str> = metrics.iter().map(|m| m.0).collect();
-    let mut chart = frame(
-        &root,
-        "Success and path efficiency per variant",
-        &labels,
+    let series: Vec<(String, Vec<Bar>)> = summaries
+        .iter()
+        .map(|v| {
+            (
+                format!("{} (n={})", v.variant, v.episodes),
+                vec![
+                    (100.0 * v.success_rate, pct_ci(v.success_rate_ci95)),
+                    (100.0 * v.spl, None),
+                    (100.0 * v.soft_spl, None),
+                    (100.0 * v.success_rate_1m, pct_ci(v.success_rate_1m_ci95)),
+                ],
+            )
+        })
+        .collect();
+    grouped_bars(
+        path,
+        "Success and path efficiency per variant (Wilson 95 % CI on rates)",
+        &["SR", "SPL", "soft SPL", "SR@1m"],
+        &series,
         0.0..100.0,
         "%",
-    )?;
-    let width = 0.8 / n;
-    for (k, v) in summaries.iter().enumerate() {
-        let c = colour(k);
-        chart
-            .draw_series(metrics.iter().enumerate().map(|(m, (_, f))| {
-                let x0 = m as f64 + 0.1 + k as f64 * width + 0.5 * width - 0.5 * width * 0.9;
-                Rectangle::new([(x0, 0.0), (x0 + width * 0.9, 100.0 * f(v))], c.filled())
-            }))
-            .map_err(FigureError::draw)?
-            .label(format!("{} (n={})", v.variant, v.episodes))
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], c.filled()));
+    )
+}
+
+/// Success rate by floors between start and goal (0, 1, 2+), with Wilson
+/// 95 % intervals, per variant (empty bins are drawn empty).
+///
+/// # Errors
+/// [`FigureError`] when `summaries` is empty or drawing fails.
+pub fn success_by_floors(path: &Path, summaries: &[VariantSummary]) -> Result<(), FigureError> {
+    if summaries.is_empty() {
+        return Err(FigureError::Empty("success-by-floors chart"));
     }
-    legend(&mut chart, 0.9, 13)?;
-    root.present().map_err(FigureError::draw)
+    let labels: Vec<String> = FLOOR_BINS
+        .iter()
+        .map(|b| format!("{} floors between", b.2))
+        .collect();
+    let labels: Vec<&str> = labels.iter().map(String::as_str).collect();
+    let series: Vec<(String, Vec<Bar>)> = summaries
+        .iter()
+        .map(|v| {
+            let bars = v
+                .by_floors
+                .iter()
+                .map(|b| {
+                    if b.episodes == 0 {
+                        (0.0, None)
+                    } else {
+                        (100.0 * b.success_rate, pct_ci(b.ci95))
+                    }
+                })
+                .collect();
+            (v.variant.clone(), bars)
+        })
+        .collect();
+    grouped_bars(
+        path,
+        "Success by floors between start and goal (Wilson 95 % CI)",
+        &labels,
+        &series,
+        0.0..100.0,
+        "success rate %",
+    )
 }
 
 /// Same-floor success rate per initial-distance bin, with Wilson 95 %
@@ -207,7 +288,9 @@ pub fn success_by_distance(path: &Path, summaries: &[VariantSummary]) -> Result<
     root.present().map_err(FigureError::draw)
 }
 
-/// Stacked bars of the outcome composition (%) per variant.
+/// The share of each outcome class (%) per variant, as grouped bars with
+/// Wilson 95 % error bars, and the share of cross-floor episodes (a flag
+/// apart from the outcome).
 ///
 /// # Errors
 /// [`FigureError`] when `summaries` is empty or drawing fails.
@@ -215,51 +298,106 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
     if summaries.is_empty() {
         return Err(FigureError::Empty("failure chart"));
     }
-    register_font();
-    const CLASSES: [(Outcome, &str); 6] = [
+    const CLASSES: [(Outcome, &str); 5] = [
         (Outcome::Success, "success"),
-        (Outcome::CrossFloor, "cross-floor"),
         (Outcome::StepLimit, "step limit"),
         (Outcome::Timeout, "timeout"),
         (Outcome::FalseStop, "false stop"),
         (Outcome::Other, "other"),
     ];
-    let root = BitMapBackend::new(path, (900, 480)).into_drawing_area();
-    let labels: Vec<&str> = summaries.iter().map(|v| v.variant.as_str()).collect();
-    let mut chart = frame(
-        &root,
-        "Outcome composition per variant",
+    let mut labels: Vec<&str> = CLASSES.iter().map(|c| c.1).collect();
+    labels.push("cross-floor episodes");
+    let series: Vec<(String, Vec<Bar>)> = summaries
+        .iter()
+        .map(|v| {
+            let n = v.episodes;
+            let share = |k: u64| {
+                (
+                    100.0 * k as f64 / n.max(1) as f64,
+                    pct_ci(wilson(k, n, 1.96)),
+                )
+            };
+            let mut bars: Vec<Bar> = CLASSES
+                .iter()
+                .map(|(o, _)| share(v.outcomes.get(o.name()).copied().unwrap_or(0)))
+                .collect();
+            bars.push(share(v.cross_floor_episodes));
+            (format!("{} (n={n})", v.variant), bars)
+        })
+        .collect();
+    grouped_bars(
+        path,
+        "Outcomes per variant (Wilson 95 % CI)",
         &labels,
+        &series,
         0.0..100.0,
         "% of episodes",
-    )?;
-    for (c, (key, label)) in CLASSES.iter().enumerate() {
-        let colour = if *key == Outcome::Success {
-            RGBColor(44, 160, 44)
+    )
+}
+
+/// The paired differences A - B of SR and SPL (percentage points) overall
+/// and by floors between start and goal, with their 95 % bootstrap
+/// intervals ([`crate::compare`]).
+///
+/// # Errors
+/// [`FigureError`] when drawing fails.
+pub fn paired_difference(
+    path: &Path,
+    comparison: &crate::compare::Comparison,
+) -> Result<(), FigureError> {
+    let mut groups = vec![("all".to_owned(), &comparison.overall)];
+    groups.extend(
+        comparison
+            .by_floors
+            .iter()
+            .map(|f| (format!("{} floors", f.floors), &f.stats)),
+    );
+    let labels: Vec<String> = groups
+        .iter()
+        .map(|(l, s)| format!("{l} (n={})", s.episodes))
+        .collect();
+    let labels: Vec<&str> = labels.iter().map(String::as_str).collect();
+    let bar = |d: &crate::compare::Difference, n: u64| -> Bar {
+        if n == 0 {
+            (0.0, None)
         } else {
-            colour(c + 2)
-        };
-        chart
-            .draw_series(summaries.iter().enumerate().map(|(k, v)| {
-                let total = v.episodes.max(1) as f64;
-                let below: u64 = CLASSES[..c]
-                    .iter()
-                    .map(|(k2, _)| v.outcomes.get(k2.name()).copied().unwrap_or(0))
-                    .sum();
-                let mine = v.outcomes.get(key.name()).copied().unwrap_or(0);
-                let (y0, y1) = (
-                    100.0 * below as f64 / total,
-                    100.0 * (below + mine) as f64 / total,
-                );
-                Rectangle::new(
-                    [(k as f64 + 0.15, y0), (k as f64 + 0.85, y1)],
-                    colour.filled(),
-                )
-            }))
-            .map_err(FigureError::draw)?
-            .label(*label)
-            .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 10, y + 5)], colour.filled()));
-    }
-    legend(&mut chart, 0.9, 13)?;
-    root.present().map_err(FigureError::draw)
+            (
+                100.0 * d.estimate,
+                Some((100.0 * d.ci95.0, 100.0 * d.ci95.1)),
+            )
+        }
+    };
+    let series: Vec<(String, Vec<Bar>)> = vec![
+        (
+            "SR A - B".to_owned(),
+            groups
+                .iter()
+                .map(|(_, s)| bar(&s.success_rate_diff, s.episodes))
+                .collect(),
+        ),
+        (
+            "SPL A - B".to_owned(),
+            groups
+                .iter()
+                .map(|(_, s)| bar(&s.spl_diff, s.episodes))
+                .collect(),
+        ),
+    ];
+    let extreme = series
+        .iter()
+        .flat_map(|(_, b)| b.iter())
+        .flat_map(|(v, ci)| [v.abs(), ci.map_or(0.0, |c| c.0.abs().max(c.1.abs()))])
+        .fold(5.0f64, f64::max);
+    let y = (extreme * 1.15).min(100.0);
+    grouped_bars(
+        path,
+        &format!(
+            "Paired difference {} - {} (95 % bootstrap CI)",
+            comparison.variant_a, comparison.variant_b
+        ),
+        &labels,
+        &series,
+        -y..y,
+        "percentage points",
+    )
 }

@@ -56,6 +56,18 @@ pub enum HarnessError {
         /// What is wrong.
         message: String,
     },
+    /// `episodes.jsonl` was written before floors were recorded (a
+    /// `cross_floor` outcome, no `floors_between`): refused, since the
+    /// failure cause of its cross-floor episodes was not recorded.
+    #[error(
+        "{path}, line {line}: written by an older sornav-sim (cross-floor recorded as an outcome, no floor levels); its results cannot be mixed with the current metrics: re-run into a new --out (or with --fresh)"
+    )]
+    LegacyRecords {
+        /// The file.
+        path: PathBuf,
+        /// Line number (1-based).
+        line: usize,
+    },
     /// The output directory holds a different evaluation.
     #[error(
         "{0} holds results of a different evaluation (run.json differs); use another --out, or --fresh to discard them"
@@ -331,12 +343,31 @@ fn scene_episodes(
     }
 }
 
+/// Whether a line of `episodes.jsonl` is a complete record of the format
+/// before floors were recorded (a `cross_floor` outcome or no
+/// `floors_between`).
+fn is_legacy_record(line: &str) -> bool {
+    let Ok(serde_json::Value::Object(m)) = serde_json::from_str::<serde_json::Value>(line) else {
+        return false;
+    };
+    m.contains_key("episode_id")
+        && m.contains_key("outcome")
+        && (m.get("outcome").and_then(|o| o.as_str()) == Some("cross_floor")
+            || !m.contains_key("floors_between"))
+}
+
 /// Reads `episodes.jsonl` (missing file: no records).
 ///
+/// Records written before floors were recorded (with a `cross_floor`
+/// outcome, without `floors_between`) are refused with
+/// [`HarnessError::LegacyRecords`] (for resume and `merge` alike): the
+/// cause of their cross-floor failures was never recorded, so they cannot
+/// be converted.
+///
 /// # Errors
-/// [`HarnessError::Io`], or [`HarnessError::Malformed`] with the line
-/// number; a truncated last line (an interrupted write) is dropped with a
-/// warning instead.
+/// [`HarnessError::Io`], [`HarnessError::LegacyRecords`], or
+/// [`HarnessError::Malformed`] with the line number; a truncated last line
+/// (an interrupted write) is dropped with a warning instead.
 pub fn read_records(path: &Path) -> Result<Vec<EpisodeRecord>, HarnessError> {
     let file = match File::open(path) {
         Ok(f) => f,
@@ -355,6 +386,12 @@ pub fn read_records(path: &Path) -> Result<Vec<EpisodeRecord>, HarnessError> {
         }
         match serde_json::from_str::<EpisodeRecord>(line) {
             Ok(r) => out.push(r),
+            Err(_) if is_legacy_record(line) => {
+                return Err(HarnessError::LegacyRecords {
+                    path: path.to_path_buf(),
+                    line: i + 1,
+                });
+            }
             Err(e) if i + 1 == last => {
                 tracing::warn!("{}: dropping a truncated last line ({e})", path.display());
             }

@@ -10,6 +10,7 @@
 //! * [`record`], [`summary`], [`report`], [`figures`], [`topdown`]: the
 //!   outputs (`episodes.jsonl`, `summary.json`, `report.md`, PNG figures
 //!   and top-down maps).
+//! * [`compare`]: the paired comparison of two runs (`sornav-sim compare`).
 //! * [`ros`]: the start-up shared by the ROS 2 binaries `sornav-robot` and
 //!   `sornav-simbot` (logging, Ctrl-C).
 //!
@@ -19,6 +20,7 @@
 #![deny(missing_docs)]
 
 pub mod adapter;
+pub mod compare;
 pub mod decision_log;
 pub mod figures;
 pub mod harness;

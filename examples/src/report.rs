@@ -10,7 +10,7 @@ use serde::Serialize;
 use crate::figures::{self, FigureError};
 use crate::harness::EvalConfig;
 use crate::record::EpisodeRecord;
-use crate::summary::{DISTANCE_BINS, VariantSummary, summarize};
+use crate::summary::{DISTANCE_BINS, FLOOR_BINS, VariantSummary, summarize};
 
 /// Why the report could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -95,7 +95,13 @@ pub fn write(
         figures::metrics_bars(&figs.join("metrics.png"), &summaries)?;
         figures::success_by_distance(&figs.join("success_by_distance.png"), &summaries)?;
         figures::failure_composition(&figs.join("failures.png"), &summaries)?;
-        drawn.extend(["metrics.png", "success_by_distance.png", "failures.png"]);
+        figures::success_by_floors(&figs.join("success_by_floors.png"), &summaries)?;
+        drawn.extend([
+            "metrics.png",
+            "success_by_distance.png",
+            "success_by_floors.png",
+            "failures.png",
+        ]);
     }
 
     let md = markdown(config, records, &summaries, run_wall_s, &drawn, dir);
@@ -109,7 +115,7 @@ pub fn table(summaries: &[VariantSummary]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| variant | episodes | SR % (95% CI) | SPL % | soft SPL % | SR@1m % | same-floor SR % | step limit % | timeout % | false stop % | cross-floor % | other % | relocating episodes % | mean actions | decision ms p50 / p99 | frame ms p50 | s / episode |"
+        "| variant | episodes | SR % (95% CI) | SPL % | soft SPL % | SR@1m % | same-floor SR % | step limit % | timeout % | false stop % | other % | cross-floor episodes % | relocating episodes % | mean actions | decision ms p50 / p99 | frame ms p50 | s / episode |"
     );
     let _ = writeln!(
         s,
@@ -131,8 +137,8 @@ pub fn table(summaries: &[VariantSummary]) -> String {
             pct(v.step_limit_rate),
             pct(v.timeout_rate),
             pct(v.false_stop_rate),
-            pct(v.cross_floor_rate),
             pct(v.other_rate),
+            pct(v.cross_floor_rate),
             pct(v.relocation_rate),
             v.mean_actions,
             v.decision_ms_p50,
@@ -173,7 +179,7 @@ fn markdown(
     );
     let _ = writeln!(
         s,
-        "Success (SR) is Habitat's: STOP within 0.1 m (geodesic) of a goal view point. SR@1m: STOP within 1 m of a goal object (the paper's boundary). Rates in %, CI = Wilson 95 %. Failure classes are exclusive, in the order cross-floor, step limit, timeout, false stop, other.\n"
+        "Success (SR) is Habitat's: STOP within 0.1 m (geodesic) of a goal view point. SR@1m: STOP within 1 m of a goal object (the paper's boundary). Rates in %, CI = Wilson 95 %. Failure classes (the cause) are exclusive, in the order step limit, timeout, false stop, other. Cross-floor is a flag apart from the cause: the goal view point nearest to the start lies on another navmesh level than the start (levels: large walkable surfaces at one height, numbered from the lowest; floors between = |goal level - start level|).\n"
     );
     let _ = writeln!(s, "## Results\n\n{}", table(summaries));
     for f in figures {
@@ -201,6 +207,56 @@ fn markdown(
             );
         }
         let _ = writeln!(s, "{row}");
+    }
+
+    let _ = writeln!(s, "\n## By floors between start and goal\n");
+    let mut header = "| variant |".to_owned();
+    for (_, _, label) in FLOOR_BINS {
+        let _ = write!(header, " {label} floors: SR % [95% CI] (n) / SPL % |");
+    }
+    let _ = writeln!(s, "{header}");
+    let _ = writeln!(s, "|---|{}", "---|".repeat(FLOOR_BINS.len()));
+    for v in summaries {
+        let mut row = format!("| {} |", v.variant);
+        for b in &v.by_floors {
+            let _ = write!(
+                row,
+                " {} [{}-{}] ({}) / {} |",
+                pct(b.success_rate),
+                pct(b.ci95.0),
+                pct(b.ci95.1),
+                b.episodes,
+                pct(b.spl)
+            );
+        }
+        let _ = writeln!(s, "{row}");
+    }
+    let _ = writeln!(s);
+    for v in summaries {
+        let mut causes = String::new();
+        for r in records
+            .iter()
+            .filter(|r| r.variant == v.variant && r.result.cross_floor && !r.result.success)
+        {
+            let _ = write!(causes, "{} ", r.result.outcome.name());
+        }
+        let mut counts: BTreeMap<&str, usize> = BTreeMap::new();
+        for c in causes.split_whitespace() {
+            *counts.entry(c).or_insert(0) += 1;
+        }
+        let list: Vec<String> = counts.iter().map(|(c, n)| format!("{c} {n}")).collect();
+        let _ = writeln!(
+            s,
+            "- {}: {} cross-floor episodes, SR {} %; their failures by cause: {}",
+            v.variant,
+            v.cross_floor_episodes,
+            pct(v.cross_floor_success_rate),
+            if list.is_empty() {
+                "none".to_owned()
+            } else {
+                list.join(", ")
+            }
+        );
     }
 
     // Where the gate acted: episodes with relocations, against the same

@@ -1,6 +1,14 @@
 //! Aggregate figures of an evaluation: one [`VariantSummary`] per variant
 //! (the fields GUIDE.md section 5 requires and more), success against the
-//! initial geodesic distance with Wilson intervals.
+//! initial geodesic distance and by floors between start and goal, with
+//! Wilson intervals.
+//!
+//! Floors come from the simulator's navmesh levels
+//! ([`sornav_platform_sim::levels`]): `floors_between` is the number of
+//! floor-to-floor transitions between the start's level and the level of
+//! the goal view point nearest to it; an episode is cross-floor when it is
+//! at least 1. The failure classes (`step_limit`, `timeout`, `false_stop`,
+//! `other`) are the cause, for cross-floor episodes too.
 
 use std::collections::BTreeMap;
 
@@ -17,6 +25,15 @@ pub const DISTANCE_BINS: [(f64, f64, &str); 4] = [
     (10.0, 15.0, "10-15 m"),
     (15.0, f64::INFINITY, ">=15 m"),
 ];
+
+/// The floors-between bins: (least, most (`None`: no bound), label).
+pub const FLOOR_BINS: [(usize, Option<usize>, &str); 3] =
+    [(0, Some(0), "0"), (1, Some(1), "1"), (2, None, "2+")];
+
+/// Index of the [`FLOOR_BINS`] bin of `floors_between`.
+pub fn floor_bin(floors_between: usize) -> usize {
+    floors_between.min(FLOOR_BINS.len() - 1)
+}
 
 /// Wilson score interval of a binomial proportion (`k` successes out of
 /// `n`) at normal quantile `z` (1.96 for 95 %). `(0, 1)` when `n == 0`.
@@ -55,6 +72,24 @@ pub struct DistanceBin {
     pub spl: f64,
 }
 
+/// SR and SPL of the episodes with a number of floors between start and
+/// goal (a [`FLOOR_BINS`] bin).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct FloorBin {
+    /// Bin label: `0`, `1` or `2+` floors between start and goal.
+    pub floors: String,
+    /// Episodes in the bin.
+    pub episodes: u64,
+    /// Successes.
+    pub successes: u64,
+    /// Success rate (0 when empty).
+    pub success_rate: f64,
+    /// Wilson 95 % interval of the success rate.
+    pub ci95: (f64, f64),
+    /// Mean SPL (0 when empty).
+    pub spl: f64,
+}
+
 /// The figures of one variant (GUIDE.md section 5; rates are fractions).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct VariantSummary {
@@ -72,6 +107,8 @@ pub struct VariantSummary {
     pub soft_spl: f64,
     /// Success within 1 m of the object (the paper's boundary).
     pub success_rate_1m: f64,
+    /// Wilson 95 % interval of `success_rate_1m`.
+    pub success_rate_1m_ci95: (f64, f64),
     /// Mean final geodesic distance to the nearest view point (m), over
     /// episodes where it is defined.
     pub dtg_m: f64,
@@ -81,8 +118,13 @@ pub struct VariantSummary {
     pub timeout_rate: f64,
     /// Failed by STOP away from every goal object.
     pub false_stop_rate: f64,
-    /// Failed, goal on another floor.
+    /// Fraction of cross-floor episodes (goal on another navmesh level than
+    /// the start; a flag apart from the failure classes).
     pub cross_floor_rate: f64,
+    /// Cross-floor episodes.
+    pub cross_floor_episodes: u64,
+    /// Success rate on cross-floor episodes (0 when none).
+    pub cross_floor_success_rate: f64,
     /// Other failures (STOP within 1 m but not at a view point).
     pub other_rate: f64,
     /// Mean actions per episode.
@@ -118,6 +160,8 @@ pub struct VariantSummary {
     pub agent_errors: u64,
     /// Same-floor success by initial geodesic distance.
     pub distance_bins: Vec<DistanceBin>,
+    /// SR / SPL by floors between start and goal (0, 1, 2+).
+    pub by_floors: Vec<FloorBin>,
     /// Episodes per outcome class.
     pub outcomes: BTreeMap<String, u64>,
 }
@@ -175,6 +219,27 @@ impl VariantSummary {
                 }
             })
             .collect();
+        let by_floors = FLOOR_BINS
+            .iter()
+            .enumerate()
+            .map(|(i, &(_, _, label))| {
+                let in_bin: Vec<&&EpisodeRecord> = records
+                    .iter()
+                    .filter(|r| floor_bin(r.result.floors_between) == i)
+                    .collect();
+                let k = in_bin.iter().filter(|r| r.result.success).count() as u64;
+                let m = in_bin.len() as u64;
+                FloorBin {
+                    floors: label.to_owned(),
+                    episodes: m,
+                    successes: k,
+                    success_rate: if m == 0 { 0.0 } else { k as f64 / m as f64 },
+                    ci95: wilson(k, m, 1.96),
+                    spl: mean(in_bin.iter().map(|r| r.result.spl)),
+                }
+            })
+            .collect();
+        let cross: Vec<&&EpisodeRecord> = records.iter().filter(|r| r.result.cross_floor).collect();
         let wall_s: f64 = records.iter().map(|r| r.result.wall_s).sum();
         let sf = same_floor.len() as u64;
         Self {
@@ -185,11 +250,18 @@ impl VariantSummary {
             spl: sim.spl,
             soft_spl: sim.soft_spl,
             success_rate_1m: sim.success_rate_1m,
+            success_rate_1m_ci95: wilson(count(&|r| r.result.success_1m), n, 1.96),
             dtg_m: sim.dtg_m,
             step_limit_rate: sim.step_limit_rate,
             timeout_rate: sim.timeout_rate,
             false_stop_rate: sim.false_stop_rate,
             cross_floor_rate: sim.cross_floor_rate,
+            cross_floor_episodes: cross.len() as u64,
+            cross_floor_success_rate: if cross.is_empty() {
+                0.0
+            } else {
+                cross.iter().filter(|r| r.result.success).count() as f64 / cross.len() as f64
+            },
             other_rate: sim.other_rate,
             mean_actions: sim.mean_actions,
             mean_collisions: sim.mean_collisions,
@@ -211,6 +283,7 @@ impl VariantSummary {
             frame_ms_p50: frame.quantile(0.5).unwrap_or(0.0),
             agent_errors: records.iter().map(|r| r.errors.len() as u64).sum(),
             distance_bins,
+            by_floors,
             outcomes,
         }
     }

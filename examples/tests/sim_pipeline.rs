@@ -150,6 +150,7 @@ fn harness_outputs_resume_shards_and_merge() {
         "figures/metrics.png",
         "figures/success_by_distance.png",
         "figures/failures.png",
+        "figures/success_by_floors.png",
     ] {
         assert!(full.join(f).is_file(), "{f} missing");
     }

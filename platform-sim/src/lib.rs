@@ -21,10 +21,12 @@
 //!   [`Scene::from_sh3d`], [`Scene::from_gltf`].
 //! * **Navigability**: [`NavMesh::build`], [`NavMesh::is_navigable`],
 //!   [`NavMesh::snap`], [`NavMesh::geodesic_field`], [`NavMesh::distance`],
-//!   [`NavMesh::path`].
+//!   [`NavMesh::path`]; floors: [`NavMesh::levels`], [`NavMesh::level_at`],
+//!   [`floor_relation`] ([`levels`]).
 //! * **Sensing and acting**: [`Camera`] over a packet-traced [`Bvh`] (depth,
 //!   semantic, optional RGB), optional sensor [`noise`], Habitat's [`Agent`]
-//!   and [`Action`]s.
+//!   and [`Action`]s; [`WaypointFollower`] ([`follow`]) drives the agent
+//!   along any planner's 3-D paths.
 //! * **Protocol**: Habitat episode files and a generator ([`episodes`]),
 //!   [`Policy`], [`Simulator`], [`run_episode`], [`Summary`] of the
 //!   [`metrics`] (success, SPL, soft SPL, failure taxonomy).
@@ -58,6 +60,7 @@ pub mod error;
 pub mod geodesic;
 pub mod geometry;
 pub mod gltf;
+pub mod levels;
 pub mod navmesh;
 pub mod obj;
 pub mod procedural;
@@ -66,6 +69,7 @@ pub mod sh3d;
 
 pub use error::{NavError, SceneError};
 pub use geodesic::GeodesicField;
+pub use levels::{FloorRelation, NavLevel, floor_relation};
 pub use navmesh::{NavMesh, NavMeshConfig, Span, SpanId};
 pub use procedural::ProceduralConfig;
 pub use scene::{
@@ -74,6 +78,7 @@ pub use scene::{
 };
 pub mod agent;
 pub mod episodes;
+pub mod follow;
 pub mod metrics;
 pub mod noise;
 pub mod policy;
@@ -82,6 +87,7 @@ pub mod run;
 
 pub use agent::{Action, Agent, AgentConfig, AgentError};
 pub use episodes::{Episode, EpisodeError, ObjectGoal, ViewPoint};
+pub use follow::{FollowerConfig, MoveOutcome, WaypointFollower};
 pub use metrics::{EpisodeResult, Outcome, Summary};
 pub use noise::{NoiseConfig, NoiseModel};
 pub use policy::{Oracle, Policy, RandomWalk, StopAtOnce};

@@ -10,9 +10,17 @@
 //! * **Soft SPL** = max(0, 1 - d_T / d_0) l / max(p, l) with d_T the final
 //!   and d_0 the initial geodesic distance to the nearest view point
 //!   (habitat-lab's `SoftSPL`).
-//! * **Failure taxonomy**, mutually exclusive and checked in this order:
-//!   cross-floor episode, step limit, wall-clock timeout, false stop (STOP away
-//!   from every goal object), other (STOP near an object but not at a view point).
+//! * **Failure taxonomy** (the cause), mutually exclusive and checked in this
+//!   order: step limit, wall-clock timeout, false stop (STOP away from every
+//!   goal object), other (STOP near an object but not at a view point).
+//! * **Floors**, recorded apart from the cause: the start's and the goal's
+//!   level, the floors between them and the cross-floor flag
+//!   (`floors_between >= 1`), defined in [`crate::levels`]. A cross-floor
+//!   episode fails for one of the causes above like any other.
+//!
+//! Records written before the floors existed (with a `cross_floor`
+//! outcome) do not deserialise into [`EpisodeResult`]: the cause of those
+//! failures was not recorded.
 
 use serde::{Deserialize, Serialize};
 
@@ -22,8 +30,6 @@ use serde::{Deserialize, Serialize};
 pub enum Outcome {
     /// Habitat success.
     Success,
-    /// Failed, and the closest goal is on another floor (> 0.5 m height difference).
-    CrossFloor,
     /// Failed by running out of actions.
     StepLimit,
     /// Failed by running out of wall-clock time.
@@ -35,12 +41,11 @@ pub enum Outcome {
 }
 
 impl Outcome {
-    /// The serialised name (`success`, `cross_floor`, `step_limit`,
-    /// `timeout`, `false_stop`, `other`).
+    /// The serialised name (`success`, `step_limit`, `timeout`,
+    /// `false_stop`, `other`).
     pub fn name(self) -> &'static str {
         match self {
             Self::Success => "success",
-            Self::CrossFloor => "cross_floor",
             Self::StepLimit => "step_limit",
             Self::Timeout => "timeout",
             Self::FalseStop => "false_stop",
@@ -93,12 +98,11 @@ pub fn soft_spl(dtg_end: f64, dtg_start: f64, shortest: f64, path: f64) -> f64 {
 /// The outcome of an episode.
 ///
 /// `success` and `near_object` (STOP within the object boundary) apply only
-/// when the agent stopped.
-pub fn classify(t: Termination, success: bool, near_object: bool, cross_floor: bool) -> Outcome {
+/// when the agent stopped. Whether the goal is on another floor is no
+/// cause: it is recorded apart ([`EpisodeResult::cross_floor`]).
+pub fn classify(t: Termination, success: bool, near_object: bool) -> Outcome {
     if t.stopped && success {
         Outcome::Success
-    } else if cross_floor {
-        Outcome::CrossFloor
     } else if t.step_limit {
         Outcome::StepLimit
     } else if t.timeout {
@@ -138,9 +142,17 @@ pub struct EpisodeResult {
     pub actions: usize,
     /// Blocked forward moves.
     pub collisions: usize,
-    /// Whether the closest goal is on another floor.
+    /// Level of the start ([`crate::levels`]; 0 is the lowest floor).
+    pub start_level: usize,
+    /// Level of the goal view point nearest to the start.
+    pub goal_level: usize,
+    /// `|goal_level - start_level|`: floor-to-floor transitions between
+    /// start and goal.
+    pub floors_between: usize,
+    /// Whether the goal is on another level than the start
+    /// (`floors_between >= 1`); recorded apart from the outcome.
     pub cross_floor: bool,
-    /// How the episode ended.
+    /// How the episode ended (the cause of a failure).
     pub outcome: Outcome,
     /// Wall-clock time of the whole [`crate::run::run_episode`] call (s),
     /// setup and scoring included.
@@ -169,9 +181,9 @@ pub struct Summary {
     pub soft_spl: f64,
     /// Mean final distance to goal over episodes with a finite one (m).
     pub dtg_m: f64,
-    /// Fraction ending in each failure class.
+    /// Fraction of cross-floor episodes (a flag, not a failure class).
     pub cross_floor_rate: f64,
-    /// Step-limit failures.
+    /// Fraction ending in each failure class: step-limit failures.
     pub step_limit_rate: f64,
     /// Timeouts.
     pub timeout_rate: f64,
@@ -212,7 +224,7 @@ impl Summary {
             } else {
                 dtgs.iter().sum::<f64>() / dtgs.len() as f64
             },
-            cross_floor_rate: rate(Outcome::CrossFloor),
+            cross_floor_rate: mean(&|r| f64::from(u8::from(r.cross_floor))),
             step_limit_rate: rate(Outcome::StepLimit),
             timeout_rate: rate(Outcome::Timeout),
             false_stop_rate: rate(Outcome::FalseStop),
@@ -251,7 +263,6 @@ mod tests {
     fn outcome_name_is_the_serde_name() {
         for o in [
             Outcome::Success,
-            Outcome::CrossFloor,
             Outcome::StepLimit,
             Outcome::Timeout,
             Outcome::FalseStop,
@@ -265,6 +276,47 @@ mod tests {
     }
 
     #[test]
+    fn legacy_cross_floor_outcome_is_refused() {
+        assert!(serde_json::from_str::<Outcome>("\"cross_floor\"").is_err());
+    }
+
+    #[test]
+    fn cross_floor_rate_counts_the_flag_not_an_outcome() {
+        let r = |cross_floor, outcome| EpisodeResult {
+            episode_id: "e".into(),
+            scene_id: "s".into(),
+            object_category: "bed".into(),
+            success: outcome == Outcome::Success,
+            success_1m: false,
+            spl: 0.0,
+            soft_spl: 0.0,
+            start_geodesic_m: 1.0,
+            dtg_m: None,
+            path_length_m: 0.0,
+            actions: 1,
+            collisions: 0,
+            start_level: 0,
+            goal_level: usize::from(cross_floor),
+            floors_between: usize::from(cross_floor),
+            cross_floor,
+            outcome,
+            wall_s: 0.0,
+            timed_s: 0.0,
+            step_ms_p50: 0.0,
+        };
+        let s = Summary::of(&[
+            r(true, Outcome::StepLimit),
+            r(true, Outcome::Success),
+            r(false, Outcome::StepLimit),
+            r(false, Outcome::FalseStop),
+        ]);
+        assert_eq!(s.cross_floor_rate, 0.5);
+        assert_eq!(s.step_limit_rate, 0.5);
+        assert_eq!(s.success_rate, 0.25);
+        assert_eq!(s.false_stop_rate, 0.25);
+    }
+
+    #[test]
     fn taxonomy_order() {
         let t = |stopped, step_limit, timeout| Termination {
             stopped,
@@ -272,29 +324,22 @@ mod tests {
             timeout,
         };
         assert_eq!(
-            classify(t(true, false, false), true, true, true),
+            classify(t(true, false, false), true, true),
             Outcome::Success
         );
         assert_eq!(
-            classify(t(false, true, false), false, false, true),
-            Outcome::CrossFloor
-        );
-        assert_eq!(
-            classify(t(false, true, true), false, false, false),
+            classify(t(false, true, true), false, false),
             Outcome::StepLimit
         );
         assert_eq!(
-            classify(t(false, false, true), false, false, false),
+            classify(t(false, false, true), false, false),
             Outcome::Timeout
         );
         assert_eq!(
-            classify(t(true, false, false), false, false, false),
+            classify(t(true, false, false), false, false),
             Outcome::FalseStop
         );
-        assert_eq!(
-            classify(t(true, false, false), false, true, false),
-            Outcome::Other
-        );
+        assert_eq!(classify(t(true, false, false), false, true), Outcome::Other);
         assert_eq!(spl(true, f64::NAN, 1.0), 0.0);
         assert_eq!(soft_spl(f64::INFINITY, 3.0, 3.0, 3.0), 0.0);
     }

@@ -172,6 +172,10 @@ pub struct NavMesh {
     /// (see [`NavMesh::is_floor_region`]).
     #[serde(default)]
     region_floor: Vec<bool>,
+    /// Floors of the height field, computed on first use
+    /// (see [`crate::levels`]).
+    #[serde(skip)]
+    pub(crate) levels: std::sync::OnceLock<crate::levels::Levels>,
 }
 
 #[derive(Clone, Copy)]
@@ -389,6 +393,7 @@ impl NavMesh {
             region_area: Vec::new(),
             span_ground,
             region_floor: Vec::new(),
+            levels: std::sync::OnceLock::new(),
         };
         nm.connect();
         nm.erode();

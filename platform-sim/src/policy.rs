@@ -102,7 +102,8 @@ impl Policy for RandomWalk {
 /// Greedy descent of the geodesic field with one-step look-ahead over the 12
 /// headings reachable by turning: turn (the shorter way) towards the heading
 /// whose forward move lowers the distance most, move forward when it is the
-/// current one. When no forward move makes progress (a doorway or corner the
+/// current one ([`crate::follow::choose_heading`], the heading choice of the
+/// [`crate::WaypointFollower`], with a 0.001 penalty per turn). When no forward move makes progress (a doorway or corner the
 /// 30 deg headings do not fit), a breadth-first search over the exact motion
 /// model (forward, left, right; up to `search_depth` actions) finds the
 /// shortest action sequence to a pose closer to the goal, and its first action
@@ -211,34 +212,31 @@ impl Policy for Oracle {
         let Some(nav) = self.nav.as_ref() else {
             return Action::Stop;
         };
-        // Greedy: best heading among the 12 reachable ones.
+        // Greedy: best heading among the 12 reachable ones (the heading
+        // choice shared with the waypoint follower).
         let turns = (std::f64::consts::TAU / agent.config().turn_deg.to_radians())
             .round()
             .max(1.0) as usize;
-        let mut best: Option<(f64, usize)> = None;
+        // Distance after a forward move for k left turns (k = 0..turns).
+        let mut after = Vec::with_capacity(turns);
         let mut probe = agent.clone();
         for k in 0..turns {
             if k > 0 {
                 probe.step(nav, Action::TurnLeft);
             }
-            if let Some((p, _)) = probe.try_forward(nav) {
-                let d = self
-                    .field
+            after.push(probe.try_forward(nav).map(|(p, _)| {
+                self.field
                     .as_ref()
                     .and_then(|f| f.distance(nav, &p).ok())
-                    .unwrap_or(f64::INFINITY);
-                // Prefer fewer turns on ties.
-                let turns_needed = k.min(turns - k) as f64;
-                let score = d + 1e-3 * turns_needed;
-                if d < d0 - 1e-6 && best.is_none_or(|(s, _)| score < s) {
-                    best = Some((score, k));
-                }
-            }
+                    .unwrap_or(f64::INFINITY)
+            }));
         }
+        let best = crate::follow::choose_heading(turns, 1e-3, |k| {
+            let i = usize::try_from(i64::from(k).rem_euclid(turns as i64)).unwrap_or(0);
+            after.get(i).copied().flatten().filter(|&d| d < d0 - 1e-6)
+        });
         match best {
-            Some((_, 0)) => Action::MoveForward,
-            Some((_, k)) if k <= turns / 2 => Action::TurnLeft,
-            Some(_) => Action::TurnRight,
+            Some(k) => crate::follow::heading_action(k),
             None => match self.search(agent, d0) {
                 Some(p) => {
                     self.plan = p.into();

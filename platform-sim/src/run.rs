@@ -67,9 +67,6 @@ pub struct RunConfig {
     pub success_distance: f64,
     /// The paper's object boundary for `success_1m` (1.0 m).
     pub object_distance: f64,
-    /// Height difference (m) above which the closest goal is on another floor,
-    /// when the episode does not record it (0.5).
-    pub cross_floor_dz: f64,
     /// Seed of the camera noise stream (combined with the step index).
     pub noise_seed: u64,
 }
@@ -81,7 +78,6 @@ impl Default for RunConfig {
             wall_clock_s: 120.0,
             success_distance: 0.1,
             object_distance: 1.0,
-            cross_floor_dz: 0.5,
             noise_seed: 0,
         }
     }
@@ -274,13 +270,19 @@ impl Observation<'_> {
 /// [`EpisodeResult::timed_s`] reports the counted time,
 /// [`EpisodeResult::wall_s`] the whole call.
 ///
+/// # Floors
+/// [`EpisodeResult::start_level`], [`EpisodeResult::goal_level`],
+/// [`EpisodeResult::floors_between`] and [`EpisodeResult::cross_floor`]
+/// come from the height field's levels ([`crate::levels::floor_relation`]),
+/// for generated and imported episodes alike.
+///
 /// # Errors
 /// [`SimError`] when the start is not navigable, no view point lies on the
 /// walkable surface or the run configuration is invalid.
 ///
 /// # Complexity
-/// O(A (W H log T + step)) for A actions with W x H frames, plus one geodesic
-/// field, O(S log S).
+/// O(A (W H log T + step)) for A actions with W x H frames, plus two geodesic
+/// fields (goals, and start for the floor relation), O(S log S).
 pub fn run_episode(
     sim: &Simulator,
     episode: &Episode,
@@ -370,9 +372,18 @@ pub fn run_episode(
     let dtg = field.distance(nav, &end).ok().filter(|d| d.is_finite());
     let success = term.stopped && dtg.is_some_and(|d| d <= config.success_distance);
     let near_object = sim.distance_to_goal_objects(episode, &end) <= config.object_distance;
-    let cross_floor = episode
-        .cross_floor
-        .unwrap_or_else(|| closest_goal_dz(episode) > config.cross_floor_dz);
+    // Floors from the height field's levels (the same definition for
+    // generated and imported episodes; `episode.cross_floor` is not read).
+    let floors = crate::levels::floor_relation(
+        nav,
+        &episode.start_position,
+        &episode.view_point_positions(),
+    )
+    .unwrap_or(crate::levels::FloorRelation {
+        start_level: 0,
+        goal_level: 0,
+        floors_between: 0,
+    });
     step_ms.sort_by(f64::total_cmp);
     Ok(EpisodeResult {
         episode_id: episode.episode_id.clone(),
@@ -387,26 +398,15 @@ pub fn run_episode(
         path_length_m: path,
         actions,
         collisions,
-        cross_floor,
-        outcome: metrics::classify(term, success, near_object, cross_floor),
+        start_level: floors.start_level,
+        goal_level: floors.goal_level,
+        floors_between: floors.floors_between,
+        cross_floor: floors.cross_floor(),
+        outcome: metrics::classify(term, success, near_object),
         wall_s: t0.elapsed().as_secs_f64(),
         timed_s,
         step_ms_p50: step_ms.get(step_ms.len() / 2).copied().unwrap_or(0.0),
     })
-}
-
-/// Height difference between the start and the view point closest to it
-/// (straight line), the fallback cross-floor test.
-fn closest_goal_dz(episode: &Episode) -> f64 {
-    episode
-        .view_point_positions()
-        .iter()
-        .min_by(|a, b| {
-            (*a - episode.start_position)
-                .norm()
-                .total_cmp(&(*b - episode.start_position).norm())
-        })
-        .map_or(0.0, |p| (p.z - episode.start_position.z).abs())
 }
 
 /// FNV-1a hash of a string (seeds per-episode noise).

@@ -12,8 +12,7 @@ use sornav_platform_sim::{
 
 mod common;
 
-/// A one-floor house and one of its episodes (same floor as its goal, so the
-/// taxonomy cannot report it as cross-floor).
+/// A one-floor house and one of its episodes (same floor as its goal).
 fn setup() -> &'static (Simulator, Episode) {
     static S: OnceLock<(Simulator, Episode)> = OnceLock::new();
     S.get_or_init(|| {

@@ -14,9 +14,9 @@ use sornav_examples::adapter::{AdapterConfig, sim_agent_config};
 use sornav_examples::harness::{
     self, EpisodeSource, EvalConfig, LlmSettings, RunOptions, VARIANTS,
 };
-use sornav_examples::report;
 use sornav_examples::scenes::parse_scene_spec;
 use sornav_examples::summary::summarize;
+use sornav_examples::{compare, report};
 use sornav_platform_sim::{CameraConfig, RunConfig};
 
 /// Run ObjectNav evaluations of SOR-Nav and its baselines on the CPU
@@ -41,6 +41,26 @@ enum Command {
         /// The shards' output directories.
         #[arg(required = true)]
         shards: Vec<PathBuf>,
+    },
+    /// Paired comparison of two runs of the same episodes: SR and SPL
+    /// differences A - B with 95 % bootstrap intervals (10 000 resamples,
+    /// fixed seed) and discordant pairs, overall and by floors between start
+    /// and goal. Prints the table and writes compare.json, compare.md and
+    /// figures/paired_difference.png.
+    Compare {
+        /// Output directory of run A.
+        dir_a: PathBuf,
+        /// Output directory of run B (may be DIR_A with another variant).
+        dir_b: PathBuf,
+        /// Variant of A (needed when DIR_A holds several).
+        #[arg(long, value_name = "NAME")]
+        variant_a: Option<String>,
+        /// Variant of B (needed when DIR_B holds several).
+        #[arg(long, value_name = "NAME")]
+        variant_b: Option<String>,
+        /// Where to write the outputs (default DIR_A/compare-A-vs-B).
+        #[arg(long, value_name = "DIR")]
+        out: Option<PathBuf>,
     },
 }
 
@@ -272,6 +292,40 @@ fn main() -> ExitCode {
                 ExitCode::FAILURE
             }
         },
+        Some(Command::Compare {
+            dir_a,
+            dir_b,
+            variant_a,
+            variant_b,
+            out,
+        }) => {
+            let c = match compare::compare(
+                &dir_a,
+                variant_a.as_deref(),
+                &dir_b,
+                variant_b.as_deref(),
+            ) {
+                Ok(c) => c,
+                Err(e) => {
+                    eprintln!("sornav-sim compare: {e}");
+                    return ExitCode::FAILURE;
+                }
+            };
+            println!("{}", c.markdown());
+            let out = out.unwrap_or_else(|| {
+                dir_a.join(format!("compare-{}-vs-{}", c.variant_a, c.variant_b))
+            });
+            match c.write(&out) {
+                Ok(md) => {
+                    println!("written: {}", md.display());
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("sornav-sim compare: {e}");
+                    ExitCode::FAILURE
+                }
+            }
+        }
         None => {
             let config = match eval_config(&cli.run) {
                 Ok(c) => c,

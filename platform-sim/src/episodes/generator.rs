@@ -20,8 +20,9 @@
 //!    filter against trivial straight-line episodes. The start heading is
 //!    uniform.
 //! 4. Each episode records the geodesic and euclidean distance to the closest
-//!    goal, its object id, and whether the start and that goal differ in
-//!    height by more than 0.5 m (`cross_floor`).
+//!    goal, its object id, and whether the goal view point nearest to the
+//!    start lies on another level of the height field (`cross_floor`, the
+//!    definition of [`crate::levels`] that [`crate::run_episode`] also uses).
 //!
 //! Generation is deterministic for a seed.
 
@@ -52,8 +53,6 @@ pub struct GeneratorConfig {
     pub view_point_radius: f64,
     /// Grid spacing of view point candidates (0.1 m).
     pub view_point_spacing: f64,
-    /// Height difference that makes an episode cross-floor (0.5 m).
-    pub cross_floor_dz: f64,
     /// Start samples tried per episode before giving up on a category.
     pub max_attempts: usize,
     /// Seed.
@@ -73,7 +72,6 @@ impl Default for GeneratorConfig {
             geodesic_to_euclid_ratio: 1.1,
             view_point_radius: 1.0,
             view_point_spacing: 0.1,
-            cross_floor_dz: 0.5,
             max_attempts: 5000,
             seed: 0,
         }
@@ -111,12 +109,9 @@ impl GeneratorConfig {
         if !(self.view_point_spacing > 0.0 && self.view_point_spacing.is_finite()) {
             return Err(GenerateError::Config("view_point_spacing must be positive"));
         }
-        if !(self.geodesic_to_euclid_ratio.is_finite()
-            && self.cross_floor_dz.is_finite()
-            && self.cross_floor_dz >= 0.0)
-        {
+        if !self.geodesic_to_euclid_ratio.is_finite() {
             return Err(GenerateError::Config(
-                "geodesic_to_euclid_ratio and cross_floor_dz must be finite",
+                "geodesic_to_euclid_ratio must be finite",
             ));
         }
         Ok(())
@@ -222,7 +217,8 @@ fn visible(
 ///
 /// # Complexity
 /// Per category: view points (see [`goal_view_points`]) plus one geodesic
-/// field per goal, O(G S log S), plus O(attempts) start samples.
+/// field per goal, O(G S log S), plus O(attempts) start samples and one
+/// geodesic field per accepted episode (its floor relation).
 pub fn generate_episodes(
     sim: &Simulator,
     config: &GeneratorConfig,
@@ -293,11 +289,12 @@ pub fn generate_episodes(
                     continue;
                 }
             }
-            let dz = closest
-                .view_points
+            let view_points: Vec<Point3<f64>> = goals
                 .iter()
-                .map(|v| (v.position.z - start.z).abs())
-                .fold(f64::INFINITY, f64::min);
+                .flat_map(|g| g.view_points.iter().map(|v| v.position))
+                .collect();
+            let cross_floor =
+                crate::levels::floor_relation(nav, &start, &view_points).map(|f| f.cross_floor());
             let yaw = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
             episodes.push(Episode {
                 episode_id: episodes.len().to_string(),
@@ -309,7 +306,7 @@ pub fn generate_episodes(
                 geodesic_distance: Some(d),
                 euclidean_distance: Some(euclid),
                 closest_goal_object_id: Some(closest.object_id),
-                cross_floor: Some(dz > config.cross_floor_dz),
+                cross_floor,
             });
             made += 1;
         }

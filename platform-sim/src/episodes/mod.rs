@@ -108,8 +108,10 @@ pub struct Episode {
     pub euclidean_distance: Option<f64>,
     /// Object id of the closest goal.
     pub closest_goal_object_id: Option<u64>,
-    /// Whether the start and the closest goal differ in height by more than
-    /// 0.5 m (generated episodes; stored as `info.cross_floor`).
+    /// Whether the goal view point nearest to the start lies on another
+    /// level of the height field (generated episodes, [`crate::levels`];
+    /// stored as `info.cross_floor`). Informational: [`crate::run_episode`]
+    /// recomputes the floors from the height field for every episode.
     pub cross_floor: Option<bool>,
 }
 
