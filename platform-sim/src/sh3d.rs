@@ -18,6 +18,16 @@
 //!   (pieces with a `staircaseCutOutShape`) cut their rectangular footprint
 //!   (not the SVG cut-out shape itself) out of the floors and ceilings they
 //!   pass through, so levels connect.
+//! * **Staircases** keep their instance ([`InstanceKind::Stairs`]) and
+//!   footprint, but their walkable geometry is rebuilt so that the agent's
+//!   0.2 m step climbs them: Sweet Home 3D's staircase models rise about
+//!   22 cm per tread (12 treads per 2.62 m storey in the example homes).
+//!   Each tread is cut across the direction of ascent, inferred from the
+//!   model (centroid of the tread below to the tread above, so winders and
+//!   curved flights are followed), into strips that rise at most
+//!   [`MAX_SH3D_RISER`] (0.19 m) each (see `restep_staircase`). The top
+//!   tread stays flush with the floor above; the model's risers, stringers
+//!   and handrails below that floor are dropped.
 //! * **Furniture** is placed from its OBJ model by Sweet Home 3D's rule: apply
 //!   `modelRotation`, centre the model's bounds at the origin, scale to
 //!   width x height x depth, mirror (`modelMirrored`), rotate by `angle`,
@@ -40,7 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::SceneError;
 use crate::category::{classify, room_type_from_name};
-use crate::geometry::{MeshBuilder, polygon_area, subtract_convex, triangulate};
+use crate::geometry::{MeshBuilder, clip_halfplane, polygon_area, subtract_convex, triangulate};
 use crate::obj::{ObjMesh, parse_obj};
 use crate::scene::{InstanceKind, Level, Room, Scene};
 
@@ -759,6 +769,27 @@ fn build_home(
                 m
             }
         };
+        if p.staircase {
+            // the floor the staircase climbs to: the next level above its
+            // foot within its height
+            let z_top = levels
+                .iter()
+                .map(|l| l.level.elevation)
+                .filter(|&e| e > z0 + 0.5 && e <= z0 + p.height / 100.0 + 0.05)
+                .fold(f64::INFINITY, f64::min);
+            let z_top = if z_top.is_finite() {
+                z_top
+            } else {
+                z0 + p.height / 100.0
+            };
+            let tris = placed_triangles(&mesh, p, z0);
+            if !restep_staircase(&mut b, inst, &tris, z0, z_top) {
+                for [v0, v1, v2] in tris {
+                    b.triangle(v0, v1, v2, inst);
+                }
+            }
+            continue;
+        }
         place_model(&mut b, inst, &mesh, p, z0);
     }
     let desc = b.finish(name, levels.into_iter().map(|l| l.level).collect(), rooms);
@@ -868,8 +899,9 @@ fn wall_with_cuts(
     }
 }
 
-/// Places an OBJ model by Sweet Home 3D's rule (see the module docs).
-fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0: f64) {
+/// The triangles of an OBJ model placed by Sweet Home 3D's rule (see the
+/// module docs), wound so that their normals face outwards.
+fn placed_triangles(mesh: &ObjMesh, p: &XmlPiece, z0: f64) -> Vec<[Point3<f64>; 3]> {
     let rot = p.model_rotation.unwrap_or_else(Matrix3::identity);
     let verts: Vec<Vector3<f64>> = mesh.vertices.iter().map(|v| rot * v.coords).collect();
     let mut lo = Vector3::repeat(f64::MAX);
@@ -881,7 +913,7 @@ fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0:
         }
     }
     if lo.x > hi.x {
-        return;
+        return Vec::new();
     }
     let centre = (lo + hi) * 0.5;
     let ext = hi - lo;
@@ -903,16 +935,149 @@ fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0:
         let py = p.y + q.x * sn + q.z * cs;
         Point3::new(px / 100.0, -py / 100.0, z0 + (q.y + p.height * 0.5) / 100.0)
     };
-    for t in &mesh.triangles {
-        let (v0, v1, v2) = (
-            tr(&verts[t[0] as usize]),
-            tr(&verts[t[1] as usize]),
-            tr(&verts[t[2] as usize]),
-        );
-        if flip {
-            b.triangle(v0, v2, v1, inst);
-        } else {
-            b.triangle(v0, v1, v2, inst);
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let (v0, v1, v2) = (
+                tr(&verts[t[0] as usize]),
+                tr(&verts[t[1] as usize]),
+                tr(&verts[t[2] as usize]),
+            );
+            if flip { [v0, v2, v1] } else { [v0, v1, v2] }
+        })
+        .collect()
+}
+
+/// Places an OBJ model by Sweet Home 3D's rule (see the module docs).
+fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0: f64) {
+    for [v0, v1, v2] in placed_triangles(mesh, p, z0) {
+        b.triangle(v0, v1, v2, inst);
+    }
+}
+
+/// Highest riser (m) of a re-stepped Sweet Home 3D staircase
+/// ([`restep_staircase`]): under the agent's 0.2 m step.
+pub const MAX_SH3D_RISER: f64 = 0.19;
+
+/// Treads narrower than this (m, triangle height over its longest edge) are
+/// nosings, stringer tops or handrails, not treads.
+const MIN_TREAD_WIDTH: f64 = 0.03;
+
+/// Rebuilds the walkable geometry of a placed staircase model (`tris`,
+/// climbing from `z0` to the floor at `z_top`) with risers of at most
+/// [`MAX_SH3D_RISER`]; returns `false` (nothing built) when the model shows
+/// fewer than two treads.
+///
+/// # Algorithm
+/// 1. **Treads**: the up-facing triangles (normal within 25 deg of +z) whose
+///    height lies in `(z0, z_top]`, at least [`MIN_TREAD_WIDTH`] wide,
+///    grouped by height (a gap above 2 cm starts a new tread); a tread's
+///    height is its highest triangle. The floor at `z0` is tread 0.
+/// 2. **Ascending direction** of tread i: from the centroid of tread i - 1
+///    to that of tread i + 1 (one-sided at the first and last tread), so
+///    straight, winding and curved flights alike are followed.
+/// 3. **Sub-steps**: tread i, rising `r` above tread i - 1, is cut across
+///    its ascending direction into `k = ceil(r / MAX_SH3D_RISER)` strips of
+///    equal depth; strip j (from the front) is a solid `r / k` (+ 3 cm)
+///    thick whose top lies `r (j + 1) / k` above tread i - 1. The back strip
+///    keeps the tread's height, so the top tread stays flush with the floor
+///    above.
+/// 4. The model's other triangles below `z_top` (risers, stringers,
+///    handrails, undersides) are dropped: they would leave the original
+///    risers standing; those above `z_top` (the balustrade around the
+///    opening upstairs) are kept.
+///
+/// The staircase keeps its instance, footprint and overall rise; only its
+/// treads become twice (or more) as many, each half as deep.
+///
+/// # Complexity
+/// O(T log T + S) for T model triangles and S built strips.
+fn restep_staircase(b: &mut MeshBuilder, inst: u32, tris: &[[Point3<f64>; 3]], z0: f64, z_top: f64) -> bool {
+    let up = |t: &[Point3<f64>; 3]| {
+        let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+        let l = n.norm();
+        (l > 1e-12 && n.z / l >= 0.9).then_some(0.5 * l)
+    };
+    let mut treads: Vec<(f64, &[Point3<f64>; 3])> = tris
+        .iter()
+        .filter_map(|t| {
+            let area = up(t)?;
+            let z = t.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+            let longest = (0..3)
+                .map(|i| (t[(i + 1) % 3] - t[i]).xy().norm())
+                .fold(0.0, f64::max);
+            (z > z0 + 0.02 && z <= z_top + 0.02 && 2.0 * area / longest.max(1e-9) >= MIN_TREAD_WIDTH)
+                .then_some((z, t))
+        })
+        .collect();
+    treads.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // group by height
+    let mut groups: Vec<(f64, Vec<&[Point3<f64>; 3]>)> = Vec::new();
+    for (z, t) in treads {
+        match groups.last_mut() {
+            Some(g) if z - g.0 <= 0.02 => {
+                g.0 = z;
+                g.1.push(t);
+            }
+            _ => groups.push((z, vec![t])),
         }
     }
+    if groups.len() < 2 {
+        return false;
+    }
+    let centroid = |g: &[&[Point3<f64>; 3]]| {
+        let (mut c, mut w) = (Vector2::zeros(), 0.0);
+        for t in g {
+            let a = 0.5 * (t[1] - t[0]).cross(&(t[2] - t[0])).norm();
+            c += (t[0].coords + t[1].coords + t[2].coords).xy() * (a / 3.0);
+            w += a;
+        }
+        c / w.max(1e-12)
+    };
+    let cents: Vec<Vector2<f64>> = groups.iter().map(|g| centroid(&g.1)).collect();
+    let n = groups.len();
+    for (i, (h, g)) in groups.iter().enumerate() {
+        let below = if i == 0 { z0 } else { groups[i - 1].0 };
+        let (a, c) = (cents[i.saturating_sub(1)], cents[(i + 1).min(n - 1)]);
+        let dir = c - a;
+        if dir.norm() < 1e-6 {
+            return false;
+        }
+        let dir = dir / dir.norm();
+        let r = h - below;
+        let k = ((r / MAX_SH3D_RISER) - 1e-9).ceil().max(1.0) as usize;
+        let (mut u0, mut u1) = (f64::MAX, f64::MIN);
+        for t in g {
+            for p in t.iter() {
+                let u = p.coords.xy().dot(&dir);
+                u0 = u0.min(u);
+                u1 = u1.max(u);
+            }
+        }
+        for j in 0..k {
+            let (ua, ub) = (
+                u0 + (u1 - u0) * j as f64 / k as f64,
+                u0 + (u1 - u0) * (j + 1) as f64 / k as f64,
+            );
+            let top = below + r * (j + 1) as f64 / k as f64;
+            for t in g {
+                let mut poly: Vec<Point2<f64>> = t.iter().map(|p| p.xy()).collect();
+                if polygon_area(&poly) < 0.0 {
+                    poly.reverse();
+                }
+                // keep ua <= u <= ub
+                let poly = clip_halfplane(&poly, dir, ub);
+                let poly = clip_halfplane(&poly, -dir, -ua);
+                if poly.len() >= 3 && polygon_area(&poly) > 1e-8 {
+                    b.prism(&poly, top - r / k as f64 - 0.03, top, inst);
+                }
+            }
+        }
+    }
+    for t in tris {
+        if t.iter().all(|p| p.z > z_top + 0.05) {
+            b.triangle(t[0], t[1], t[2], inst);
+        }
+    }
+    true
 }

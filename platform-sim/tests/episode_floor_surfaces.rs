@@ -174,10 +174,7 @@ fn shared_home_episodes_stay_off_furniture() {
         .unwrap();
         let sim = simulator(
             scene,
-            NavMeshConfig {
-                max_step: 0.22,
-                ..NavMeshConfig::default()
-            },
+            NavMeshConfig::default(),
         );
         let episodes = generate_episodes(&sim, &generator(3)).unwrap();
         assert!(!episodes.is_empty(), "{home}");
