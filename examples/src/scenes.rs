@@ -142,11 +142,9 @@ impl SceneSource {
         camera: &sornav_platform_sim::CameraConfig,
     ) -> Result<Simulator, SceneSpecError> {
         let scene = self.load(models)?;
-        Simulator::new(scene, sim_config(camera)).map_err(|source| {
-            SceneSpecError::Simulator {
-                name: self.name(),
-                source,
-            }
+        Simulator::new(scene, sim_config(camera)).map_err(|source| SceneSpecError::Simulator {
+            name: self.name(),
+            source,
         })
     }
 }

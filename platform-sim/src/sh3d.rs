@@ -50,7 +50,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::SceneError;
 use crate::category::{classify, room_type_from_name};
-use crate::geometry::{MeshBuilder, clip_halfplane, polygon_area, subtract_convex, triangulate};
+use crate::geometry::{MeshBuilder, polygon_area, subtract_convex, triangulate};
 use crate::obj::{ObjMesh, parse_obj};
 use crate::scene::{InstanceKind, Level, Room, Scene};
 
@@ -963,6 +963,9 @@ pub const MAX_SH3D_RISER: f64 = 0.19;
 /// nosings, stringer tops or handrails, not treads.
 const MIN_TREAD_WIDTH: f64 = 0.03;
 
+/// Cell (m) of the raster a staircase's treads are rebuilt on.
+const RESTEP_CELL: f64 = 0.025;
+
 /// Rebuilds the walkable geometry of a placed staircase model (`tris`,
 /// climbing from `z0` to the floor at `z_top`) with risers of at most
 /// [`MAX_SH3D_RISER`]; returns `false` (nothing built) when the model shows
@@ -992,13 +995,20 @@ const MIN_TREAD_WIDTH: f64 = 0.03;
 ///
 /// # Complexity
 /// O(T log T + S) for T model triangles and S built strips.
-fn restep_staircase(b: &mut MeshBuilder, inst: u32, tris: &[[Point3<f64>; 3]], z0: f64, z_top: f64) -> bool {
+fn restep_staircase(
+    b: &mut MeshBuilder,
+    inst: u32,
+    tris: &[[Point3<f64>; 3]],
+    z0: f64,
+    z_top: f64,
+) -> bool {
     let up = |t: &[Point3<f64>; 3]| {
         let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
         let l = n.norm();
         (l > 1e-12 && n.z / l >= 0.9).then_some(0.5 * l)
     };
-    let mut treads: Vec<(f64, &[Point3<f64>; 3])> = tris
+    // up-facing triangles in (z0, z_top]: (height, triangle, wide enough)
+    let mut ups: Vec<(f64, &[Point3<f64>; 3], bool)> = tris
         .iter()
         .filter_map(|t| {
             let area = up(t)?;
@@ -1006,14 +1016,17 @@ fn restep_staircase(b: &mut MeshBuilder, inst: u32, tris: &[[Point3<f64>; 3]], z
             let longest = (0..3)
                 .map(|i| (t[(i + 1) % 3] - t[i]).xy().norm())
                 .fold(0.0, f64::max);
-            (z > z0 + 0.02 && z <= z_top + 0.02 && 2.0 * area / longest.max(1e-9) >= MIN_TREAD_WIDTH)
-                .then_some((z, t))
+            let wide = 2.0 * area / longest.max(1e-9) >= MIN_TREAD_WIDTH;
+            (z > z0 + 0.02 && z <= z_top + 0.02).then_some((z, t, wide))
         })
         .collect();
-    treads.sort_by(|a, b| a.0.total_cmp(&b.0));
-    // group by height
+    ups.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // treads: wide triangles grouped by height
     let mut groups: Vec<(f64, Vec<&[Point3<f64>; 3]>)> = Vec::new();
-    for (z, t) in treads {
+    for &(z, t, wide) in &ups {
+        if !wide {
+            continue;
+        }
         match groups.last_mut() {
             Some(g) if z - g.0 <= 0.02 => {
                 g.0 = z;
@@ -1025,53 +1038,181 @@ fn restep_staircase(b: &mut MeshBuilder, inst: u32, tris: &[[Point3<f64>; 3]], z
     if groups.len() < 2 {
         return false;
     }
-    let centroid = |g: &[&[Point3<f64>; 3]]| {
-        let (mut c, mut w) = (Vector2::zeros(), 0.0);
-        for t in g {
-            let a = 0.5 * (t[1] - t[0]).cross(&(t[2] - t[0])).norm();
-            c += (t[0].coords + t[1].coords + t[2].coords).xy() * (a / 3.0);
-            w += a;
-        }
-        c / w.max(1e-12)
-    };
-    let cents: Vec<Vector2<f64>> = groups.iter().map(|g| centroid(&g.1)).collect();
-    let n = groups.len();
-    for (i, (h, g)) in groups.iter().enumerate() {
-        let below = if i == 0 { z0 } else { groups[i - 1].0 };
-        let (a, c) = (cents[i.saturating_sub(1)], cents[(i + 1).min(n - 1)]);
-        let dir = c - a;
-        if dir.norm() < 1e-6 {
-            return false;
-        }
-        let dir = dir / dir.norm();
-        let r = h - below;
-        let k = ((r / MAX_SH3D_RISER) - 1e-9).ceil().max(1.0) as usize;
-        let (mut u0, mut u1) = (f64::MAX, f64::MIN);
+    // narrow triangles (slivers of a tread's triangulation, nosings) join a
+    // tread of their height when they touch its wide triangles; others
+    // (stringer tops, handrails) are dropped
+    let bbox = |g: &[&[Point3<f64>; 3]]| {
+        let (mut lo, mut hi) = (Vector2::repeat(f64::MAX), Vector2::repeat(f64::MIN));
         for t in g {
             for p in t.iter() {
-                let u = p.coords.xy().dot(&dir);
-                u0 = u0.min(u);
-                u1 = u1.max(u);
+                lo = lo.inf(&p.coords.xy());
+                hi = hi.sup(&p.coords.xy());
             }
         }
-        for j in 0..k {
-            let (ua, ub) = (
-                u0 + (u1 - u0) * j as f64 / k as f64,
-                u0 + (u1 - u0) * (j + 1) as f64 / k as f64,
-            );
-            let top = below + r * (j + 1) as f64 / k as f64;
-            for t in g {
-                let mut poly: Vec<Point2<f64>> = t.iter().map(|p| p.xy()).collect();
-                if polygon_area(&poly) < 0.0 {
-                    poly.reverse();
+        (lo, hi)
+    };
+    let boxes: Vec<(Vector2<f64>, Vector2<f64>)> = groups.iter().map(|g| bbox(&g.1)).collect();
+    for &(z, t, wide) in &ups {
+        if wide {
+            continue;
+        }
+        let (lo, hi) = bbox(&[t]);
+        if let Some(k) = groups.iter().zip(&boxes).position(|(g, (glo, ghi))| {
+            (g.0 - z).abs() <= 0.02
+                && lo.x >= glo.x - 0.02
+                && lo.y >= glo.y - 0.02
+                && hi.x <= ghi.x + 0.02
+                && hi.y <= ghi.y + 0.02
+        }) {
+            groups[k].1.push(t);
+        }
+    }
+    // distance from a plan point to a tread (0 inside)
+    let dist = |p: Vector2<f64>, g: &[&[Point3<f64>; 3]]| -> f64 {
+        g.iter()
+            .map(|t| {
+                let v = [t[0].coords.xy(), t[1].coords.xy(), t[2].coords.xy()];
+                let side = |a: Vector2<f64>, b: Vector2<f64>| {
+                    (b - a).x * (p - a).y - (b - a).y * (p - a).x
+                };
+                let (s0, s1, s2) = (side(v[0], v[1]), side(v[1], v[2]), side(v[2], v[0]));
+                if (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0) {
+                    return 0.0;
                 }
-                // keep ua <= u <= ub
-                let poly = clip_halfplane(&poly, dir, ub);
-                let poly = clip_halfplane(&poly, -dir, -ua);
-                if poly.len() >= 3 && polygon_area(&poly) > 1e-8 {
-                    b.prism(&poly, top - r / k as f64 - 0.03, top, inst);
+                (0..3)
+                    .map(|i| {
+                        let (a, b) = (v[i], v[(i + 1) % 3]);
+                        let ab = b - a;
+                        let u = ((p - a).dot(&ab) / ab.norm_squared().max(1e-18)).clamp(0.0, 1.0);
+                        (a + ab * u - p).norm()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    // raster of the treads: per cell the highest tread whose triangles hold
+    // its centre
+    let (mut lo, mut hi) = (Vector2::repeat(f64::MAX), Vector2::repeat(f64::MIN));
+    for (l, h) in &boxes {
+        lo = lo.inf(l);
+        hi = hi.sup(h);
+    }
+    let nx = (((hi.x - lo.x) / RESTEP_CELL).ceil() as usize).clamp(1, 4000);
+    let ny = (((hi.y - lo.y) / RESTEP_CELL).ceil() as usize).clamp(1, 4000);
+    let centre = |i: usize, j: usize| {
+        Vector2::new(
+            lo.x + (i as f64 + 0.5) * RESTEP_CELL,
+            lo.y + (j as f64 + 0.5) * RESTEP_CELL,
+        )
+    };
+    let n = groups.len();
+    let mut cell_tread = vec![usize::MAX; nx * ny];
+    for (k, (_, g)) in groups.iter().enumerate() {
+        let (glo, ghi) = boxes[k];
+        let i0 = (((glo.x - lo.x) / RESTEP_CELL).floor().max(0.0) as usize).min(nx - 1);
+        let i1 = (((ghi.x - lo.x) / RESTEP_CELL).ceil().max(0.0) as usize).min(nx);
+        let j0 = (((glo.y - lo.y) / RESTEP_CELL).floor().max(0.0) as usize).min(ny - 1);
+        let j1 = (((ghi.y - lo.y) / RESTEP_CELL).ceil().max(0.0) as usize).min(ny);
+        for j in j0..j1 {
+            for i in i0..i1 {
+                if dist(centre(i, j), g) == 0.0 {
+                    cell_tread[j * nx + i] = k; // groups rise: the last wins
                 }
             }
+        }
+    }
+    // distance to the nearest cell outside the staircase's treads (the floor
+    // below the first tread and above the last one): two-pass chamfer
+    let mut out_d: Vec<f64> = cell_tread
+        .iter()
+        .map(|&k| if k == usize::MAX { 0.0 } else { f64::INFINITY })
+        .collect();
+    let diag = RESTEP_CELL * std::f64::consts::SQRT_2;
+    for pass in 0..2 {
+        for step in 0..nx * ny {
+            let c = if pass == 0 { step } else { nx * ny - 1 - step };
+            let (i, j) = ((c % nx) as i64, (c / nx) as i64);
+            let sgn = if pass == 0 { -1 } else { 1 };
+            let mut best = out_d[c];
+            for (di, dj, w) in [
+                (sgn, 0, RESTEP_CELL),
+                (0, sgn, RESTEP_CELL),
+                (sgn, sgn, diag),
+                (-sgn, sgn, diag),
+            ] {
+                let (a, bj) = (i + di, j + dj);
+                // beyond the raster lies the outside
+                let d = if a < 0 || bj < 0 || a >= nx as i64 || bj >= ny as i64 {
+                    0.5 * RESTEP_CELL
+                } else {
+                    out_d[bj as usize * nx + a as usize]
+                };
+                best = best.min(d + w);
+            }
+            out_d[c] = best;
+        }
+    }
+    // fraction of the way from the tread below (the outside for the first
+    // tread) to the tread above (the outside for the last)
+    let frac: Vec<f64> = cell_tread
+        .iter()
+        .enumerate()
+        .map(|(c, &k)| {
+            if k == usize::MAX {
+                return 0.0;
+            }
+            let p = centre(c % nx, c / nx);
+            let d_low = if k > 0 {
+                dist(p, &groups[k - 1].1)
+            } else {
+                out_d[c]
+            };
+            let d_high = if k + 1 < n {
+                dist(p, &groups[k + 1].1)
+            } else {
+                out_d[c]
+            };
+            if d_low + d_high > 1e-12 {
+                d_low / (d_low + d_high)
+            } else {
+                0.5
+            }
+        })
+        .collect();
+    // sub-steps, merged into runs along x
+    let step_of = |c: usize| -> Option<(usize, usize, usize)> {
+        let k = cell_tread[c];
+        if k == usize::MAX {
+            return None;
+        }
+        let below = if k == 0 { z0 } else { groups[k - 1].0 };
+        let r = groups[k].0 - below;
+        let m = ((r / MAX_SH3D_RISER) - 1e-9).ceil().max(1.0) as usize;
+        let j = ((frac[c] * m as f64).floor().max(0.0) as usize).min(m - 1);
+        Some((k, j, m))
+    };
+    for j in 0..ny {
+        let mut i = 0;
+        while i < nx {
+            let Some(key) = step_of(j * nx + i) else {
+                i += 1;
+                continue;
+            };
+            let mut e = i + 1;
+            while e < nx && step_of(j * nx + e) == Some(key) {
+                e += 1;
+            }
+            let (k, sub, m) = key;
+            let below = if k == 0 { z0 } else { groups[k - 1].0 };
+            let r = groups[k].0 - below;
+            let top = below + r * (sub + 1) as f64 / m as f64;
+            let (x0, y0) = (lo.x + i as f64 * RESTEP_CELL, lo.y + j as f64 * RESTEP_CELL);
+            b.aabb_box(
+                Point3::new(x0, y0, top - r / m as f64 - 0.03),
+                Point3::new(lo.x + e as f64 * RESTEP_CELL, y0 + RESTEP_CELL, top),
+                inst,
+            );
+            i = e;
         }
     }
     for t in tris {

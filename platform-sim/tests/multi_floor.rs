@@ -13,9 +13,7 @@ use std::time::Instant;
 use nalgebra::Point3;
 use rayon::prelude::*;
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
-use sornav_platform_sim::procedural::{
-    HM3D_FLOOR_COUNTS, MAX_RISER, STAIR_RUN, house_record_for,
-};
+use sornav_platform_sim::procedural::{HM3D_FLOOR_COUNTS, MAX_RISER, STAIR_RUN, house_record_for};
 use sornav_platform_sim::{
     CameraConfig, InstanceKind, NavMesh, NavMeshConfig, ProceduralConfig, Scene, SimConfig,
     Simulator,
@@ -90,9 +88,12 @@ fn treads(scene: &Scene) -> Vec<(f64, f64, f64)> {
         if n.norm() < 1e-12 || n.z / n.norm() < 0.9 {
             continue;
         }
-        let e = by_h
-            .entry((p[0].z * 1000.0).round() as i64)
-            .or_insert((f64::MAX, f64::MIN, f64::MAX, f64::MIN));
+        let e = by_h.entry((p[0].z * 1000.0).round() as i64).or_insert((
+            f64::MAX,
+            f64::MIN,
+            f64::MAX,
+            f64::MIN,
+        ));
         for q in &p {
             e.0 = e.0.min(q.x);
             e.1 = e.1.max(q.x);
@@ -165,7 +166,9 @@ fn procedural_floors_are_levels_joined_by_climbable_stairs() {
         })
         .collect();
     for (floors, seed, ms, half) in &results {
-        eprintln!("{floors} floors seed {seed}: generate + height field {ms:.0} ms, half landing {half}");
+        eprintln!(
+            "{floors} floors seed {seed}: generate + height field {ms:.0} ms, half landing {half}"
+        );
     }
     // both shapes occur: some houses have a switchback, some only straight flights
     let multi: Vec<_> = results.iter().filter(|r| r.0 >= 3).collect();

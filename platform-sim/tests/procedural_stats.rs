@@ -169,7 +169,10 @@ fn imitated(st: &HouseStats, value: impl Fn(&HouseSize) -> f64) -> Vec<(f64, f64
         .iter()
         .map(|h| {
             let c = class(h);
-            (value(h), f64::from(HM3D_FLOOR_COUNTS[c]) / per_class[c] as f64)
+            (
+                value(h),
+                f64::from(HM3D_FLOOR_COUNTS[c]) / per_class[c] as f64,
+            )
         })
         .collect()
 }

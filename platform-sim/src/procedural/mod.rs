@@ -1217,14 +1217,7 @@ pub fn generate_with_stats(
             format!("Staircase {f}")
         };
         let st = b.add_instance(InstanceKind::Stairs, "stairs", &name, f);
-        g.build(
-            &mut b,
-            st,
-            m,
-            f as f64 * level_h,
-            t,
-            config.floor_thickness,
-        );
+        g.build(&mut b, st, m, f as f64 * level_h, t, config.floor_thickness);
     }
     // furniture: object lists drawn per room from its own type's statistics
     // (the stairwell and its landing stay empty); with shuffled semantics the
