@@ -22,12 +22,13 @@
 //!   footprint, but their walkable geometry is rebuilt so that the agent's
 //!   0.2 m step climbs them: Sweet Home 3D's staircase models rise about
 //!   22 cm per tread (12 treads per 2.62 m storey in the example homes).
-//!   Each tread is cut across the direction of ascent, inferred from the
-//!   model (centroid of the tread below to the tread above, so winders and
-//!   curved flights are followed), into strips that rise at most
-//!   [`MAX_SH3D_RISER`] (0.19 m) each (see `restep_staircase`). The top
-//!   tread stays flush with the floor above; the model's risers, stringers
-//!   and handrails below that floor are dropped.
+//!   Each tread is rebuilt on a 2.5 cm raster and cut across the direction
+//!   of ascent, inferred from the model (each point's position between the
+//!   tread below and the tread above, so winders and curved flights are
+//!   followed), into sub-steps that rise at most [`MAX_SH3D_RISER`]
+//!   (0.19 m) each (see `restep_staircase`). The top tread stays flush with
+//!   the floor above; the model's risers, stringers and handrails below
+//!   that floor are dropped.
 //! * **Furniture** is placed from its OBJ model by Sweet Home 3D's rule: apply
 //!   `modelRotation`, centre the model's bounds at the origin, scale to
 //!   width x height x depth, mirror (`modelMirrored`), rotate by `angle`,
@@ -974,27 +975,32 @@ const RESTEP_CELL: f64 = 0.025;
 /// # Algorithm
 /// 1. **Treads**: the up-facing triangles (normal within 25 deg of +z) whose
 ///    height lies in `(z0, z_top]`, at least [`MIN_TREAD_WIDTH`] wide,
-///    grouped by height (a gap above 2 cm starts a new tread); a tread's
-///    height is its highest triangle. The floor at `z0` is tread 0.
-/// 2. **Ascending direction** of tread i: from the centroid of tread i - 1
-///    to that of tread i + 1 (one-sided at the first and last tread), so
-///    straight, winding and curved flights alike are followed.
-/// 3. **Sub-steps**: tread i, rising `r` above tread i - 1, is cut across
-///    its ascending direction into `k = ceil(r / MAX_SH3D_RISER)` strips of
-///    equal depth; strip j (from the front) is a solid `r / k` (+ 3 cm)
-///    thick whose top lies `r (j + 1) / k` above tread i - 1. The back strip
-///    keeps the tread's height, so the top tread stays flush with the floor
-///    above.
-/// 4. The model's other triangles below `z_top` (risers, stringers,
+///    grouped by height (a gap above 2 cm starts a new tread); narrower
+///    triangles of a tread's height inside its bounds (slivers, nosings)
+///    join it, others (stringer tops, handrails) are dropped. A tread's
+///    height is its highest triangle.
+/// 2. **Raster**: the treads' bounds are cut into [`RESTEP_CELL`] (2.5 cm)
+///    cells; a cell belongs to the highest tread holding its centre.
+/// 3. **Direction of ascent**, per cell of tread i: the fraction
+///    `f = d_low / (d_low + d_high)` of the way from tread i - 1 to tread
+///    i + 1 (distances in plan to their triangles; for the first tread
+///    `d_low` is the distance to the outside of the staircase, where the
+///    floor is, for the last tread `d_high`). It follows straight, winding
+///    and curved flights alike (a winder is split along its bisector).
+/// 4. **Sub-steps**: tread i, rising `r` above tread i - 1 (the floor for
+///    the first), gets `k = ceil(r / MAX_SH3D_RISER)` sub-steps; a cell with
+///    fraction f lies on sub-step `j = floor(k f)`, whose top is
+///    `r (j + 1) / k` above tread i - 1. Cells of one row with the same
+///    sub-step are merged into one box `r / k` (+ 3 cm) thick. The back of
+///    the last tread keeps its height, flush with the floor above.
+/// 5. The model's other triangles below `z_top` (risers, stringers,
 ///    handrails, undersides) are dropped: they would leave the original
 ///    risers standing; those above `z_top` (the balustrade around the
 ///    opening upstairs) are kept.
 ///
-/// The staircase keeps its instance, footprint and overall rise; only its
-/// treads become twice (or more) as many, each half as deep.
-///
 /// # Complexity
-/// O(T log T + S) for T model triangles and S built strips.
+/// O(T log T + C G) for T model triangles, C raster cells and G triangles
+/// per tread.
 fn restep_staircase(
     b: &mut MeshBuilder,
     inst: u32,
