@@ -22,12 +22,15 @@ use sornav_platform_sim::{
 /// Floor area (m^2) that makes a height a level.
 const LEVEL_AREA: f64 = 3.0;
 
+/// Per island: floor area and one of its spans.
+type Regions = BTreeMap<u32, (f64, u32)>;
+
 /// Navmesh levels, bottom up: (height, a floor span on the level's largest
 /// island).
 fn nav_levels(nav: &NavMesh) -> Vec<(f64, u32)> {
     let cell = nav.config().cell_size.powi(2);
     // bin -> (area, region -> (area, span))
-    let mut bins: BTreeMap<i64, (f64, BTreeMap<u32, (f64, u32)>)> = BTreeMap::new();
+    let mut bins: BTreeMap<i64, (f64, Regions)> = BTreeMap::new();
     for s in 0..nav.span_count() as u32 {
         if !nav.is_floor_span(s) {
             continue;
