@@ -103,12 +103,6 @@ impl SceneSource {
         }
     }
 
-    /// Whether this is a Sweet Home 3D home (their staircases have 21.8 cm
-    /// risers, see [`sim_config`]).
-    fn is_sweet_home(&self) -> bool {
-        matches!(self, SceneSource::HomeXml { .. } | SceneSource::Sh3d { .. })
-    }
-
     /// Loads the scene.
     ///
     /// # Errors
@@ -148,26 +142,20 @@ impl SceneSource {
         camera: &sornav_platform_sim::CameraConfig,
     ) -> Result<Simulator, SceneSpecError> {
         let scene = self.load(models)?;
-        Simulator::new(scene, sim_config(self.is_sweet_home(), camera)).map_err(|source| {
-            SceneSpecError::Simulator {
-                name: self.name(),
-                source,
-            }
+        Simulator::new(scene, sim_config(camera)).map_err(|source| SceneSpecError::Simulator {
+            name: self.name(),
+            source,
         })
     }
 }
 
-/// The simulator configuration of a scene: Habitat's defaults, except that
-/// Sweet Home 3D homes accept 0.22 m steps (their example staircases have
-/// 21.8 cm risers; with Habitat's 0.2 m their floors would not connect).
-pub fn sim_config(sweet_home: bool, camera: &sornav_platform_sim::CameraConfig) -> SimConfig {
-    let mut nav = NavMeshConfig::default();
-    if sweet_home {
-        nav.max_step = nav.max_step.max(0.22);
-    }
+/// The simulator configuration of a scene: Habitat's defaults (0.2 m step)
+/// for every source; Sweet Home 3D staircases are re-stepped on import to
+/// risers of at most 0.19 m (`sornav_platform_sim::sh3d`).
+pub fn sim_config(camera: &sornav_platform_sim::CameraConfig) -> SimConfig {
     SimConfig {
         camera: camera.clone(),
-        nav,
+        nav: NavMeshConfig::default(),
         ..SimConfig::default()
     }
 }

@@ -18,6 +18,17 @@
 //!   (pieces with a `staircaseCutOutShape`) cut their rectangular footprint
 //!   (not the SVG cut-out shape itself) out of the floors and ceilings they
 //!   pass through, so levels connect.
+//! * **Staircases** keep their instance ([`InstanceKind::Stairs`]) and
+//!   footprint, but their walkable geometry is rebuilt so that the agent's
+//!   0.2 m step climbs them: Sweet Home 3D's staircase models rise about
+//!   22 cm per tread (12 treads per 2.62 m storey in the example homes).
+//!   Each tread is rebuilt on a 2.5 cm raster and cut across the direction
+//!   of ascent, inferred from the model (each point's position between the
+//!   tread below and the tread above, so winders and curved flights are
+//!   followed), into sub-steps that rise at most [`MAX_SH3D_RISER`]
+//!   (0.19 m) each (see `restep_staircase`). The top tread stays flush with
+//!   the floor above; the model's risers, stringers and handrails below
+//!   that floor are dropped.
 //! * **Furniture** is placed from its OBJ model by Sweet Home 3D's rule: apply
 //!   `modelRotation`, centre the model's bounds at the origin, scale to
 //!   width x height x depth, mirror (`modelMirrored`), rotate by `angle`,
@@ -759,6 +770,27 @@ fn build_home(
                 m
             }
         };
+        if p.staircase {
+            // the floor the staircase climbs to: the next level above its
+            // foot within its height
+            let z_top = levels
+                .iter()
+                .map(|l| l.level.elevation)
+                .filter(|&e| e > z0 + 0.5 && e <= z0 + p.height / 100.0 + 0.05)
+                .fold(f64::INFINITY, f64::min);
+            let z_top = if z_top.is_finite() {
+                z_top
+            } else {
+                z0 + p.height / 100.0
+            };
+            let tris = placed_triangles(&mesh, p, z0);
+            if !restep_staircase(&mut b, inst, &tris, z0, z_top) {
+                for [v0, v1, v2] in tris {
+                    b.triangle(v0, v1, v2, inst);
+                }
+            }
+            continue;
+        }
         place_model(&mut b, inst, &mesh, p, z0);
     }
     let desc = b.finish(name, levels.into_iter().map(|l| l.level).collect(), rooms);
@@ -868,8 +900,9 @@ fn wall_with_cuts(
     }
 }
 
-/// Places an OBJ model by Sweet Home 3D's rule (see the module docs).
-fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0: f64) {
+/// The triangles of an OBJ model placed by Sweet Home 3D's rule (see the
+/// module docs), wound so that their normals face outwards.
+fn placed_triangles(mesh: &ObjMesh, p: &XmlPiece, z0: f64) -> Vec<[Point3<f64>; 3]> {
     let rot = p.model_rotation.unwrap_or_else(Matrix3::identity);
     let verts: Vec<Vector3<f64>> = mesh.vertices.iter().map(|v| rot * v.coords).collect();
     let mut lo = Vector3::repeat(f64::MAX);
@@ -881,7 +914,7 @@ fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0:
         }
     }
     if lo.x > hi.x {
-        return;
+        return Vec::new();
     }
     let centre = (lo + hi) * 0.5;
     let ext = hi - lo;
@@ -903,16 +936,295 @@ fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0:
         let py = p.y + q.x * sn + q.z * cs;
         Point3::new(px / 100.0, -py / 100.0, z0 + (q.y + p.height * 0.5) / 100.0)
     };
-    for t in &mesh.triangles {
-        let (v0, v1, v2) = (
-            tr(&verts[t[0] as usize]),
-            tr(&verts[t[1] as usize]),
-            tr(&verts[t[2] as usize]),
-        );
-        if flip {
-            b.triangle(v0, v2, v1, inst);
-        } else {
-            b.triangle(v0, v1, v2, inst);
+    mesh.triangles
+        .iter()
+        .map(|t| {
+            let (v0, v1, v2) = (
+                tr(&verts[t[0] as usize]),
+                tr(&verts[t[1] as usize]),
+                tr(&verts[t[2] as usize]),
+            );
+            if flip { [v0, v2, v1] } else { [v0, v1, v2] }
+        })
+        .collect()
+}
+
+/// Places an OBJ model by Sweet Home 3D's rule (see the module docs).
+fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0: f64) {
+    for [v0, v1, v2] in placed_triangles(mesh, p, z0) {
+        b.triangle(v0, v1, v2, inst);
+    }
+}
+
+/// Highest riser (m) of a re-stepped Sweet Home 3D staircase
+/// ([`restep_staircase`]): under the agent's 0.2 m step.
+pub const MAX_SH3D_RISER: f64 = 0.19;
+
+/// Treads narrower than this (m, triangle height over its longest edge) are
+/// nosings, stringer tops or handrails, not treads.
+const MIN_TREAD_WIDTH: f64 = 0.03;
+
+/// Cell (m) of the raster a staircase's treads are rebuilt on.
+const RESTEP_CELL: f64 = 0.025;
+
+/// Rebuilds the walkable geometry of a placed staircase model (`tris`,
+/// climbing from `z0` to the floor at `z_top`) with risers of at most
+/// [`MAX_SH3D_RISER`]; returns `false` (nothing built) when the model shows
+/// fewer than two treads.
+///
+/// # Algorithm
+/// 1. **Treads**: the up-facing triangles (normal within 25 deg of +z) whose
+///    height lies in `(z0, z_top]`, at least [`MIN_TREAD_WIDTH`] wide,
+///    grouped by height (a gap above 2 cm starts a new tread); narrower
+///    triangles of a tread's height inside its bounds (slivers, nosings)
+///    join it, others (stringer tops, handrails) are dropped. A tread's
+///    height is its highest triangle.
+/// 2. **Raster**: the treads' bounds are cut into [`RESTEP_CELL`] (2.5 cm)
+///    cells; a cell belongs to the highest tread holding its centre.
+/// 3. **Direction of ascent**, per cell of tread i: the fraction
+///    `f = d_low / (d_low + d_high)` of the way from tread i - 1 to tread
+///    i + 1 (distances in plan to their triangles; for the first tread
+///    `d_low` is the distance to the outside of the staircase, where the
+///    floor is, for the last tread `d_high`). It follows straight, winding
+///    and curved flights alike (a winder is split along its bisector).
+/// 4. **Sub-steps**: tread i, rising `r` above tread i - 1 (the floor for
+///    the first), gets `k = ceil(r / MAX_SH3D_RISER)` sub-steps; a cell with
+///    fraction f lies on sub-step `j = floor(k f)`, whose top is
+///    `r (j + 1) / k` above tread i - 1. Cells of one row with the same
+///    sub-step are merged into one box `r / k` (+ 3 cm) thick. The back of
+///    the last tread keeps its height, flush with the floor above.
+/// 5. The model's other triangles below `z_top` (risers, stringers,
+///    handrails, undersides) are dropped: they would leave the original
+///    risers standing; those above `z_top` (the balustrade around the
+///    opening upstairs) are kept.
+///
+/// # Complexity
+/// O(T log T + C G) for T model triangles, C raster cells and G triangles
+/// per tread.
+fn restep_staircase(
+    b: &mut MeshBuilder,
+    inst: u32,
+    tris: &[[Point3<f64>; 3]],
+    z0: f64,
+    z_top: f64,
+) -> bool {
+    let up = |t: &[Point3<f64>; 3]| {
+        let n = (t[1] - t[0]).cross(&(t[2] - t[0]));
+        let l = n.norm();
+        (l > 1e-12 && n.z / l >= 0.9).then_some(0.5 * l)
+    };
+    // up-facing triangles in (z0, z_top]: (height, triangle, wide enough)
+    let mut ups: Vec<(f64, &[Point3<f64>; 3], bool)> = tris
+        .iter()
+        .filter_map(|t| {
+            let area = up(t)?;
+            let z = t.iter().map(|p| p.z).fold(f64::MIN, f64::max);
+            let longest = (0..3)
+                .map(|i| (t[(i + 1) % 3] - t[i]).xy().norm())
+                .fold(0.0, f64::max);
+            let wide = 2.0 * area / longest.max(1e-9) >= MIN_TREAD_WIDTH;
+            (z > z0 + 0.02 && z <= z_top + 0.02).then_some((z, t, wide))
+        })
+        .collect();
+    ups.sort_by(|a, b| a.0.total_cmp(&b.0));
+    // treads: wide triangles grouped by height
+    let mut groups: Vec<(f64, Vec<&[Point3<f64>; 3]>)> = Vec::new();
+    for &(z, t, wide) in &ups {
+        if !wide {
+            continue;
+        }
+        match groups.last_mut() {
+            Some(g) if z - g.0 <= 0.02 => {
+                g.0 = z;
+                g.1.push(t);
+            }
+            _ => groups.push((z, vec![t])),
         }
     }
+    if groups.len() < 2 {
+        return false;
+    }
+    // narrow triangles (slivers of a tread's triangulation, nosings) join a
+    // tread of their height when they touch its wide triangles; others
+    // (stringer tops, handrails) are dropped
+    let bbox = |g: &[&[Point3<f64>; 3]]| {
+        let (mut lo, mut hi) = (Vector2::repeat(f64::MAX), Vector2::repeat(f64::MIN));
+        for t in g {
+            for p in t.iter() {
+                lo = lo.inf(&p.coords.xy());
+                hi = hi.sup(&p.coords.xy());
+            }
+        }
+        (lo, hi)
+    };
+    let boxes: Vec<(Vector2<f64>, Vector2<f64>)> = groups.iter().map(|g| bbox(&g.1)).collect();
+    for &(z, t, wide) in &ups {
+        if wide {
+            continue;
+        }
+        let (lo, hi) = bbox(&[t]);
+        if let Some(k) = groups.iter().zip(&boxes).position(|(g, (glo, ghi))| {
+            (g.0 - z).abs() <= 0.02
+                && lo.x >= glo.x - 0.02
+                && lo.y >= glo.y - 0.02
+                && hi.x <= ghi.x + 0.02
+                && hi.y <= ghi.y + 0.02
+        }) {
+            groups[k].1.push(t);
+        }
+    }
+    // distance from a plan point to a tread (0 inside)
+    let dist = |p: Vector2<f64>, g: &[&[Point3<f64>; 3]]| -> f64 {
+        g.iter()
+            .map(|t| {
+                let v = [t[0].coords.xy(), t[1].coords.xy(), t[2].coords.xy()];
+                let side = |a: Vector2<f64>, b: Vector2<f64>| {
+                    (b - a).x * (p - a).y - (b - a).y * (p - a).x
+                };
+                let (s0, s1, s2) = (side(v[0], v[1]), side(v[1], v[2]), side(v[2], v[0]));
+                if (s0 >= 0.0 && s1 >= 0.0 && s2 >= 0.0) || (s0 <= 0.0 && s1 <= 0.0 && s2 <= 0.0) {
+                    return 0.0;
+                }
+                (0..3)
+                    .map(|i| {
+                        let (a, b) = (v[i], v[(i + 1) % 3]);
+                        let ab = b - a;
+                        let u = ((p - a).dot(&ab) / ab.norm_squared().max(1e-18)).clamp(0.0, 1.0);
+                        (a + ab * u - p).norm()
+                    })
+                    .fold(f64::INFINITY, f64::min)
+            })
+            .fold(f64::INFINITY, f64::min)
+    };
+    // raster of the treads: per cell the highest tread whose triangles hold
+    // its centre
+    let (mut lo, mut hi) = (Vector2::repeat(f64::MAX), Vector2::repeat(f64::MIN));
+    for (l, h) in &boxes {
+        lo = lo.inf(l);
+        hi = hi.sup(h);
+    }
+    let nx = (((hi.x - lo.x) / RESTEP_CELL).ceil() as usize).clamp(1, 4000);
+    let ny = (((hi.y - lo.y) / RESTEP_CELL).ceil() as usize).clamp(1, 4000);
+    let centre = |i: usize, j: usize| {
+        Vector2::new(
+            lo.x + (i as f64 + 0.5) * RESTEP_CELL,
+            lo.y + (j as f64 + 0.5) * RESTEP_CELL,
+        )
+    };
+    let n = groups.len();
+    let mut cell_tread = vec![usize::MAX; nx * ny];
+    for (k, (_, g)) in groups.iter().enumerate() {
+        let (glo, ghi) = boxes[k];
+        let i0 = (((glo.x - lo.x) / RESTEP_CELL).floor().max(0.0) as usize).min(nx - 1);
+        let i1 = (((ghi.x - lo.x) / RESTEP_CELL).ceil().max(0.0) as usize).min(nx);
+        let j0 = (((glo.y - lo.y) / RESTEP_CELL).floor().max(0.0) as usize).min(ny - 1);
+        let j1 = (((ghi.y - lo.y) / RESTEP_CELL).ceil().max(0.0) as usize).min(ny);
+        for j in j0..j1 {
+            for i in i0..i1 {
+                if dist(centre(i, j), g) == 0.0 {
+                    cell_tread[j * nx + i] = k; // groups rise: the last wins
+                }
+            }
+        }
+    }
+    // distance to the nearest cell outside the staircase's treads (the floor
+    // below the first tread and above the last one): two-pass chamfer
+    let mut out_d: Vec<f64> = cell_tread
+        .iter()
+        .map(|&k| if k == usize::MAX { 0.0 } else { f64::INFINITY })
+        .collect();
+    let diag = RESTEP_CELL * std::f64::consts::SQRT_2;
+    for pass in 0..2 {
+        for step in 0..nx * ny {
+            let c = if pass == 0 { step } else { nx * ny - 1 - step };
+            let (i, j) = ((c % nx) as i64, (c / nx) as i64);
+            let sgn = if pass == 0 { -1 } else { 1 };
+            let mut best = out_d[c];
+            for (di, dj, w) in [
+                (sgn, 0, RESTEP_CELL),
+                (0, sgn, RESTEP_CELL),
+                (sgn, sgn, diag),
+                (-sgn, sgn, diag),
+            ] {
+                let (a, bj) = (i + di, j + dj);
+                // beyond the raster lies the outside
+                let d = if a < 0 || bj < 0 || a >= nx as i64 || bj >= ny as i64 {
+                    0.5 * RESTEP_CELL
+                } else {
+                    out_d[bj as usize * nx + a as usize]
+                };
+                best = best.min(d + w);
+            }
+            out_d[c] = best;
+        }
+    }
+    // fraction of the way from the tread below (the outside for the first
+    // tread) to the tread above (the outside for the last)
+    let frac: Vec<f64> = cell_tread
+        .iter()
+        .enumerate()
+        .map(|(c, &k)| {
+            if k == usize::MAX {
+                return 0.0;
+            }
+            let p = centre(c % nx, c / nx);
+            let d_low = if k > 0 {
+                dist(p, &groups[k - 1].1)
+            } else {
+                out_d[c]
+            };
+            let d_high = if k + 1 < n {
+                dist(p, &groups[k + 1].1)
+            } else {
+                out_d[c]
+            };
+            if d_low + d_high > 1e-12 {
+                d_low / (d_low + d_high)
+            } else {
+                0.5
+            }
+        })
+        .collect();
+    // sub-steps, merged into runs along x
+    let step_of = |c: usize| -> Option<(usize, usize, usize)> {
+        let k = cell_tread[c];
+        if k == usize::MAX {
+            return None;
+        }
+        let below = if k == 0 { z0 } else { groups[k - 1].0 };
+        let r = groups[k].0 - below;
+        let m = ((r / MAX_SH3D_RISER) - 1e-9).ceil().max(1.0) as usize;
+        let j = ((frac[c] * m as f64).floor().max(0.0) as usize).min(m - 1);
+        Some((k, j, m))
+    };
+    for j in 0..ny {
+        let mut i = 0;
+        while i < nx {
+            let Some(key) = step_of(j * nx + i) else {
+                i += 1;
+                continue;
+            };
+            let mut e = i + 1;
+            while e < nx && step_of(j * nx + e) == Some(key) {
+                e += 1;
+            }
+            let (k, sub, m) = key;
+            let below = if k == 0 { z0 } else { groups[k - 1].0 };
+            let r = groups[k].0 - below;
+            let top = below + r * (sub + 1) as f64 / m as f64;
+            let (x0, y0) = (lo.x + i as f64 * RESTEP_CELL, lo.y + j as f64 * RESTEP_CELL);
+            b.aabb_box(
+                Point3::new(x0, y0, top - r / m as f64 - 0.03),
+                Point3::new(lo.x + e as f64 * RESTEP_CELL, y0 + RESTEP_CELL, top),
+                inst,
+            );
+            i = e;
+        }
+    }
+    for t in tris {
+        if t.iter().all(|p| p.z > z_top + 0.05) {
+            b.triangle(t[0], t[1], t[2], inst);
+        }
+    }
+    true
 }

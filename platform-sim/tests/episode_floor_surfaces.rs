@@ -172,13 +172,7 @@ fn shared_home_episodes_stay_off_furniture() {
             &dir.join("models"),
         )
         .unwrap();
-        let sim = simulator(
-            scene,
-            NavMeshConfig {
-                max_step: 0.22,
-                ..NavMeshConfig::default()
-            },
-        );
+        let sim = simulator(scene, NavMeshConfig::default());
         let episodes = generate_episodes(&sim, &generator(3)).unwrap();
         assert!(!episodes.is_empty(), "{home}");
         let (p, h) = check(&sim, &episodes);

@@ -210,10 +210,10 @@ fn shared_homes_oracle() {
     }
 }
 
-/// The two-storey homes with the 0.22 m step their 21.8 cm stair risers need
-/// (see `scene_sh3d::multi_level_homes_connect_floors`): episodes cross
-/// floors, and the oracle climbs the real staircases (straight and curved)
-/// by moving forward.
+/// The two-storey homes at the agent's 0.2 m step (their staircases are
+/// re-stepped on import, see `scene_sh3d::multi_level_homes_connect_floors`):
+/// episodes cross floors, and the oracle climbs the staircases (straight and
+/// curved) by moving forward.
 #[test]
 fn shared_homes_across_floors_oracle() {
     let Some(dir) = sornav_test_support::shared_data("sh3d-homes") else {
@@ -238,10 +238,6 @@ fn shared_homes_across_floors_oracle() {
                     width: 160,
                     height: 120,
                     ..CameraConfig::default()
-                },
-                nav: sornav_platform_sim::NavMeshConfig {
-                    max_step: 0.22,
-                    ..Default::default()
                 },
                 ..SimConfig::default()
             },

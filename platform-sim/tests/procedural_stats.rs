@@ -3,6 +3,10 @@
 //! type; shuffled semantics breaks the room-object association and keeps the
 //! objects.
 //!
+//! Houses imitate validation houses drawn by floor class with HM3D's
+//! floor-count shares over all 900 scenes, so house sizes (rooms, area) are
+//! compared with the validation houses weighted accordingly (`imitated`).
+//!
 //! `HOUSES` houses (seeds 0..HOUSES) are generated once and shared by the
 //! tests. Every comparison is a goodness-of-fit test whose tolerance follows
 //! from the sample size: binomial z-scores with a Bonferroni bound, Pearson's
@@ -16,7 +20,9 @@ use std::sync::OnceLock;
 
 use rayon::prelude::*;
 use sornav_platform_sim::procedural::furniture::shape;
-use sornav_platform_sim::procedural::{HouseStats, STAIRWELL_LANDING, house_record};
+use sornav_platform_sim::procedural::{
+    HM3D_FLOOR_COUNTS, HouseSize, HouseStats, STAIRWELL_LANDING, house_record,
+};
 use sornav_platform_sim::{NavMesh, NavMeshConfig, ProceduralConfig, RoomType, Scene};
 
 const HOUSES: u64 = 160;
@@ -149,6 +155,61 @@ fn ks_distance(sample: &[f64], target: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// The distribution of the houses the generator imitates: each validation
+/// house weighted by its floor class's share of HM3D's 900 scenes
+/// ([`HM3D_FLOOR_COUNTS`]) over the validation houses of that class (the
+/// generator draws a floor class, then a house of that class).
+fn imitated(st: &HouseStats, value: impl Fn(&HouseSize) -> f64) -> Vec<(f64, f64)> {
+    let class = |h: &HouseSize| h.floors.clamp(1, 4) as usize - 1;
+    let mut per_class = [0usize; 4];
+    for h in &st.houses {
+        per_class[class(h)] += 1;
+    }
+    st.houses
+        .iter()
+        .map(|h| {
+            let c = class(h);
+            (
+                value(h),
+                f64::from(HM3D_FLOOR_COUNTS[c]) / per_class[c] as f64,
+            )
+        })
+        .collect()
+}
+
+/// One-sample Kolmogorov-Smirnov distance between `sample` and the weighted
+/// empirical distribution `target` (value, weight).
+fn ks_weighted(sample: &[f64], target: &[(f64, f64)]) -> f64 {
+    let mut s = sample.to_vec();
+    s.sort_by(f64::total_cmp);
+    let total: f64 = target.iter().map(|t| t.1).sum();
+    let t_cdf = |x: f64, strict: bool| {
+        target
+            .iter()
+            .filter(|t| if strict { t.0 < x } else { t.0 <= x })
+            .map(|t| t.1)
+            .sum::<f64>()
+            / total
+    };
+    let s_cdf = |x: f64, strict: bool| {
+        (if strict {
+            s.partition_point(|&y| y < x)
+        } else {
+            s.partition_point(|&y| y <= x)
+        }) as f64
+            / s.len() as f64
+    };
+    s.iter()
+        .copied()
+        .chain(target.iter().map(|t| t.0))
+        .map(|x| {
+            (s_cdf(x, false) - t_cdf(x, false))
+                .abs()
+                .max((s_cdf(x, true) - t_cdf(x, true)).abs())
+        })
+        .fold(0.0, f64::max)
+}
+
 /// KS critical distance at level 0.001 for a sample of `n` against a fixed
 /// distribution (c(0.001) = 1.95, conservative for discrete targets).
 fn ks_critical(n: usize) -> f64 {
@@ -159,9 +220,10 @@ fn ks_critical(n: usize) -> f64 {
 fn house_sizes_follow_hm3d_metadata() {
     let hs = houses(false);
     let st = stats();
-    // floors: HM3D's 1, 2 and more; the generator builds at most two, so
-    // houses of three or more floors become two-floor houses
-    let one = st.houses.iter().filter(|h| h.floors == 1).count() as f64 / st.houses.len() as f64;
+    // floors: the share of one-floor houses is HM3D's (all 900 scenes; the
+    // full 1/2/3/4+ distribution is checked by `multi_floor::floor_counts_follow_hm3d`)
+    let total: u32 = HM3D_FLOOR_COUNTS.iter().sum();
+    let one = f64::from(HM3D_FLOOR_COUNTS[0]) / f64::from(total);
     let k1 = hs.iter().filter(|h| h.floors == 1).count();
     let z = z_binomial(k1, hs.len(), one);
     eprintln!(
@@ -169,14 +231,16 @@ fn house_sizes_follow_hm3d_metadata() {
         hs.len()
     );
     assert!(z.abs() < 3.29, "one-floor share: z = {z:.2}");
-    // every house has the floors and rooms of the HM3D house it imitates
+    // every house has the floors (four or more: four) and rooms of the HM3D
+    // house it imitates
     let mut raised = 0;
     let mut short = Vec::new();
     for h in hs {
         let rec = house_record(h.seed, st).unwrap();
-        assert_eq!(h.floors, rec.floors.clamp(1, 2) as usize, "seed {}", h.seed);
-        // a two-floor house needs the stairwell and three rooms
-        let least = if h.floors == 2 { 4 } else { 1 };
+        assert_eq!(h.floors, rec.floors.clamp(1, 4) as usize, "seed {}", h.seed);
+        // a house of F > 1 floors needs the stairwell, two rooms downstairs
+        // and one on every upper floor
+        let least = if h.floors > 1 { h.floors + 2 } else { 1 };
         let want = (rec.rooms as usize).max(least);
         if want != rec.rooms as usize {
             raised += 1;
@@ -199,18 +263,19 @@ fn house_sizes_follow_hm3d_metadata() {
         missing * 50 <= wanted,
         "{missing} of {wanted} rooms missing"
     );
-    eprintln!("rooms: {raised} houses raised to the two-floor minimum");
-    // rooms per house: KS against HM3D's num_rooms
+    eprintln!("rooms: {raised} houses raised to the multi-floor minimum");
+    // rooms per house: KS against HM3D's num_rooms of the imitated houses
+    // (validation houses weighted by HM3D's floor-class shares)
     let rooms: Vec<f64> = hs.iter().map(|h| h.rooms as f64).collect();
-    let target: Vec<f64> = st.houses.iter().map(|h| f64::from(h.rooms)).collect();
-    let d = ks_distance(&rooms, &target);
+    let target = imitated(st, |h| f64::from(h.rooms));
+    let d = ks_weighted(&rooms, &target);
     eprintln!("rooms KS {d:.3} (critical {:.3})", ks_critical(hs.len()));
     assert!(d < ks_critical(hs.len()), "rooms per house: KS {d:.3}");
     // walkable area: KS against HM3D's navigable area, and per house within
     // a factor 1.5 of the imitated house's area
     let area: Vec<f64> = hs.iter().map(|h| h.walkable).collect();
-    let target: Vec<f64> = st.houses.iter().map(|h| h.navigable_area).collect();
-    let d = ks_distance(&area, &target);
+    let target = imitated(st, |h| h.navigable_area);
+    let d = ks_weighted(&area, &target);
     let ratios: Vec<f64> = hs
         .iter()
         .map(|h| h.walkable / house_record(h.seed, st).unwrap().navigable_area)
@@ -299,7 +364,7 @@ fn room_types_follow_hm3d() {
     let bound = 3.29; // two-sided 0.001 per type, before Bonferroni
     for (&t, &p) in &presence {
         if t == RoomType::Hallway || p * big.len() as f64 <= 5.0 {
-            continue; // two-floor houses always hold their stairwell
+            continue; // houses with stairs always hold their stairwell
         }
         let k = big.iter().filter(|h| h.types.contains(&t)).count();
         let z = z_binomial(k, big.len(), p);
@@ -566,4 +631,9 @@ fn statistical_helpers_match_tables() {
     assert_eq!(ks_distance(&v, &v), 0.0);
     let w: Vec<f64> = v.iter().map(|x| x + 100.0).collect();
     assert_eq!(ks_distance(&v, &w), 1.0);
+    // the weighted KS equals the plain one for unit weights
+    let vw: Vec<(f64, f64)> = w.iter().map(|&x| (x, 1.0)).collect();
+    assert_eq!(ks_weighted(&v, &vw), 1.0);
+    let half: Vec<(f64, f64)> = v.iter().map(|&x| (x, 2.0)).collect();
+    assert_eq!(ks_weighted(&v, &half), 0.0);
 }

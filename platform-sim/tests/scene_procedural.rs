@@ -165,7 +165,7 @@ fn shuffled_semantics_changes_room_contents_only() {
 #[test]
 fn bad_config_is_rejected() {
     let cfg = ProceduralConfig {
-        floors: Some(3),
+        floors: Some(5),
         ..Default::default()
     };
     assert!(matches!(

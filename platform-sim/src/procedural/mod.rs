@@ -1,32 +1,49 @@
 //! Procedural houses: the embedded default scene source, no data files needed.
 //!
-//! [`generate`] builds a seeded multi-room house with one or two floors that
-//! imitates one HM3D validation house (statistics in [`HouseStats`], derived
-//! from HM3D-Semantics v0.2 by the `derive_hm3d_stats` example):
+//! [`generate`] builds a seeded multi-room house with one to four floors
+//! that imitates one HM3D validation house (statistics in [`HouseStats`],
+//! derived from HM3D-Semantics v0.2 by the `derive_hm3d_stats` example):
 //!
-//! 1. **Size** — a house (floors, rooms, navigable area) is drawn uniformly
-//!    from HM3D's validation scenes ([`house_record`]). Houses of three or
-//!    more floors are built with two. The house gets that many rooms (a
-//!    two-floor house at least four), where the stairwell of a two-floor
-//!    house (the stair block [`STAIRWELL`] below and the landing
-//!    [`STAIRWELL_LANDING`] above) counts as one Hall/stairwell room, as
-//!    HM3D annotates a stairwell spanning floors as one region. The
-//!    footprint is the navigable area times [`FOOTPRINT_PER_NAVIGABLE`]
-//!    (walls, the agent-radius band along them and furniture take the rest),
-//!    at least [`MIN_ROOM_AREA`] per room, shared by the floors.
+//! 1. **Size** — the number of floors is drawn from HM3D's floor counts
+//!    over all 900 scenes ([`HM3D_FLOOR_COUNTS`]: 35 / 41 / 21 / 3 % for
+//!    1 / 2 / 3 / 4+ floors), then a validation house of that floor class
+//!    (floors, rooms, navigable area) uniformly ([`house_record`]; four or
+//!    more floors are built as four). The house gets that many rooms (a
+//!    house of F > 1 floors at least F + 2), where the stairwell (the core
+//!    [`STAIRWELL`] on the ground floor and its upper parts
+//!    [`STAIRWELL_LANDING`]) counts as one Hall/stairwell room, as HM3D
+//!    annotates a stairwell spanning floors as one region. The footprint
+//!    of a floor is the navigable area times [`FOOTPRINT_PER_NAVIGABLE`]
+//!    shared by the floors plus half the stairwell's void, at least
+//!    [`MIN_ROOM_AREA`] per room plus the stairwell core.
 //! 2. **Room types** — a house of R rooms expects `mean_t R / M` rooms of
 //!    type t (HM3D's mean per scene `mean_t`, `M` their sum; HM3D's stairs
 //!    regions count as hallways). Each type is present with HM3D's fraction
 //!    of scenes holding it (lowered for houses too small to expect one), and
 //!    the remaining rooms go to the types present in proportion to their
-//!    expected extra rooms (see `sample_room_types`). In two-floor houses
-//!    kitchens, living and dining rooms, garages, laundries and offices go
-//!    downstairs first, bedrooms upstairs.
-//! 3. **Layout** — two-floor houses reserve a stair block at one corner with
-//!    a landing beside its top; the rest of each floor is cut recursively
-//!    into one rectangle per room, areas in proportion to the room type
-//!    (a living room about three times a bathroom), no narrower than
-//!    `min_room_side`.
+//!    expected extra rooms (see `sample_room_types`). Rooms are dealt to the
+//!    floors evenly, in the order kitchens, living and dining rooms,
+//!    garages, laundries, offices ... bedrooms, so that the ground floor
+//!    gets the day rooms and the top floor the bedrooms.
+//! 3. **Stairs** — houses with several floors reserve a stairwell core at
+//!    one corner on every floor: two lanes of [`STAIR_WIDTH`] side by side,
+//!    a floor landing of [`STAIR_END`] at each end. Each storey gets,
+//!    with probability 1/2 each ([`StairShape`]), a straight flight (from
+//!    one end to the other) or a switchback (a flight up to a half landing
+//!    of [`HALF_LANDING`] at half the storey height, a flight back); the
+//!    next storey's stair starts where it arrives, its first flight in the
+//!    lane beside the last flight below, so the stairs stack and no flight
+//!    runs right above the top of another (head room over every tread and
+//!    landing: at least half a storey). Risers are the storey height over
+//!    `ceil(h / MAX_RISER)` ([`MAX_RISER`] 0.18 m, under the agent's 0.2 m
+//!    step; 0.177 m straight and 0.166 m switchback at the default 2.65 m),
+//!    treads [`STAIR_RUN`] deep. Upstairs the core has a floor only at its
+//!    landing end (the stairwell hole) and opens there onto the floor (a
+//!    door, or the landing strip beside a north landing); the ground floor
+//!    core opens beside the foot of the stairs. The rest of each floor is
+//!    cut recursively into one rectangle per room, areas in proportion to
+//!    the room type (a living room about three times a bathroom), no
+//!    narrower than `min_room_side`.
 //! 4. **Doors** — a random spanning tree of the room adjacency graph (plus
 //!    extra doors with probability [`EXTRA_DOOR_PROBABILITY`]) gets door
 //!    openings, so every room is reachable; walls are extruded with
@@ -75,7 +92,8 @@ use furniture::{Placement, shape};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ProceduralConfig {
-    /// Number of floors (1 or 2); `None` draws it from the HM3D statistics.
+    /// Number of floors (1 to 4); `None` draws it from HM3D's floor counts
+    /// ([`HM3D_FLOOR_COUNTS`]).
     pub floors: Option<u32>,
     /// Place objects ignoring room types (tests robustness when commonsense fails).
     pub shuffled_semantics: bool,
@@ -91,8 +109,8 @@ pub struct ProceduralConfig {
     pub door_height: f64,
     /// Smallest room side (m).
     pub min_room_side: f64,
-    /// Most rooms per floor (the stairwell not counted; a two-floor house
-    /// has at least two rooms downstairs and one upstairs). The default, 20,
+    /// Most rooms per floor (the stairwell not counted; a house with stairs
+    /// has at least two rooms downstairs and one on every upper floor). The default, 20,
     /// leaves HM3D's room counts uncapped.
     pub max_rooms_per_floor: u32,
 }
@@ -125,8 +143,8 @@ impl ProceduralConfig {
                 message: message.into(),
             })
         };
-        if self.floors.is_some_and(|f| !(1..=2).contains(&f)) {
-            return bad("floors", "must be 1 or 2");
+        if self.floors.is_some_and(|f| !(1..=MAX_FLOORS).contains(&f)) {
+            return bad("floors", "must be in [1, 4]");
         }
         let t = self.wall_thickness;
         if !(t.is_finite() && (0.02..=0.5).contains(&t)) {
@@ -272,11 +290,12 @@ fn area_weight(t: RoomType) -> f64 {
 /// `procedural_stats` test).
 pub const FOOTPRINT_PER_NAVIGABLE: f64 = 1.95;
 
-/// Name of the stair block room of a two-floor house (ground floor).
+/// Name of the stairwell core on the ground floor of a house with stairs.
 pub const STAIRWELL: &str = "stairwell";
 
-/// Name of the landing at the top of the stairs; with the stair block below
-/// it forms one Hall/stairwell room in the statistics.
+/// Name of the stairwell's rooms on the upper floors (the core with its
+/// landing, and the landing strip beside it); with the [`STAIRWELL`] below
+/// they form one Hall/stairwell room in the statistics.
 pub const STAIRWELL_LANDING: &str = "stairwell landing";
 
 /// Largest share of a room's footprint that floor-standing furniture may take.
@@ -335,7 +354,7 @@ pub const WALL_FRONT_CLEARANCE: f64 = 0.6;
 /// for its area.
 pub const MIN_ROOM_AREA: f64 = 9.0;
 
-/// Floor preference of room types in two-floor houses (lower: ground floor).
+/// Floor preference of room types in houses with stairs (lower: ground floor).
 fn ground_rank(t: RoomType) -> u32 {
     match t {
         RoomType::Garage | RoomType::Outdoor => 0,
@@ -540,15 +559,264 @@ fn weighted_pick<T: Copy>(rng: &mut ChaCha8Rng, items: &[(T, f64)]) -> Option<T>
     items.last().map(|i| i.0)
 }
 
-/// The HM3D house (floors, rooms, navigable area) that the house of `seed`
-/// imitates: the generator's first draw, uniform over `stats.houses`
-/// (`None` without houses).
-pub fn house_record(seed: u64, stats: &HouseStats) -> Option<&HouseSize> {
+/// Number of HM3D scenes by number of floors: 1, 2, 3 and 4 or more
+/// (315, 369, 193 and 23 of the 900 scenes: 35.0, 41.0, 21.4 and 2.6 %).
+///
+/// Derived from the `num_floors` column of `hm3d_scene_metadata.csv` of the
+/// HM3D-Semantics v0.2 statistics (Yadav et al. 2023,
+/// matterport/habitat-matterport-3dresearch; train and validation scenes,
+/// used under the Matterport academic terms); the 23 scenes of four or more
+/// floors (20 of four, one each of five, six and eight) form one class.
+/// No raw file is shipped.
+pub const HM3D_FLOOR_COUNTS: [u32; 4] = [315, 369, 193, 23];
+
+/// Most floors of a procedural house (HM3D's "four or more" class).
+pub const MAX_FLOORS: u32 = 4;
+
+/// Highest stair riser (m) of a procedural house: below the agent's 0.2 m
+/// step ([`crate::NavMeshConfig::max_step`]).
+pub const MAX_RISER: f64 = 0.18;
+
+/// Tread depth (going) of the procedural stairs (m).
+pub const STAIR_RUN: f64 = 0.26;
+
+/// Clear width of a procedural stair flight between its wall and the
+/// neighbouring flight (m).
+pub const STAIR_WIDTH: f64 = 1.05;
+
+/// Length (m) of the floor landing at each end of the stairwell (longer
+/// when a door and its margins need more).
+pub const STAIR_END: f64 = 1.5;
+
+/// Length (m) of the half landing where a switchback stair turns.
+pub const HALF_LANDING: f64 = 1.3;
+
+/// Shape of the stair between two consecutive floors.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum StairShape {
+    /// One flight from one end of the stairwell to the other.
+    Straight,
+    /// Two flights in opposite directions joined by a half landing at half
+    /// the storey height (a U / switchback stair); it ends where it starts.
+    Switchback,
+}
+
+/// The stair joining floor `f` to floor `f + 1` in the stairwell core.
+#[derive(Debug, Clone, Copy)]
+struct StairModule {
+    shape: StairShape,
+    /// Departs from the south end (y = 0) of the core (else the north end).
+    south: bool,
+    /// Lane (0: x in [0, lane], 1: x in [lane, 2 lane]) of the first flight.
+    first_lane: usize,
+}
+
+impl StairModule {
+    fn last_lane(&self) -> usize {
+        match self.shape {
+            StairShape::Straight => self.first_lane,
+            StairShape::Switchback => 1 - self.first_lane,
+        }
+    }
+    /// End of the core where the stair arrives (south?).
+    fn arrives_south(&self) -> bool {
+        match self.shape {
+            StairShape::Straight => !self.south,
+            StairShape::Switchback => self.south,
+        }
+    }
+}
+
+/// Dimensions of the stairwell core (two lanes side by side along y).
+#[derive(Debug, Clone, Copy)]
+struct StairGeom {
+    /// Lane width including half a wall thickness.
+    lane: f64,
+    /// Core width (two lanes).
+    cw: f64,
+    /// Core depth (along y).
+    sd: f64,
+    /// Floor landing length at each end.
+    end: f64,
+    /// Storey height.
+    level_h: f64,
+    /// Risers of a straight flight and their height.
+    n: usize,
+    rise: f64,
+    /// Risers of each half of a switchback and their height.
+    nh: usize,
+    rise_h: f64,
+}
+
+impl StairGeom {
+    fn new(cfg: &ProceduralConfig) -> StairGeom {
+        let level_h = cfg.wall_height + cfg.floor_thickness;
+        let n = ((level_h / MAX_RISER) - 1e-9).ceil().max(2.0) as usize;
+        let nh = ((0.5 * level_h / MAX_RISER) - 1e-9).ceil().max(2.0) as usize;
+        let lane = STAIR_WIDTH + 0.5 * cfg.wall_thickness;
+        let end = STAIR_END.max(cfg.door_width + cfg.wall_thickness + 0.2);
+        StairGeom {
+            end,
+            lane,
+            cw: 2.0 * lane,
+            sd: 2.0 * end + STAIR_RUN * (n - 1) as f64,
+            level_h,
+            n,
+            rise: level_h / n as f64,
+            nh,
+            rise_h: 0.5 * level_h / nh as f64,
+        }
+    }
+
+    /// Builds the stair of `m` from height `z` into instance `inst`:
+    /// treads of [`STAIR_RUN`] as boxes a riser (plus 3 cm) thick, so that
+    /// the space under a flight stays free; the half landing a slab of
+    /// `slab` thickness.
+    fn build(&self, b: &mut MeshBuilder, inst: u32, m: &StairModule, z: f64, t: f64, slab: f64) {
+        let y_of = |s: f64| if m.south { s } else { self.sd - s };
+        let lane_x = |lane: usize| {
+            if lane == 0 {
+                (0.5 * t, self.lane)
+            } else {
+                (self.lane, self.cw - 0.5 * t)
+            }
+        };
+        let tread = |b: &mut MeshBuilder, lane: usize, s0: f64, s1: f64, h: f64, thick: f64| {
+            let (x0, x1) = lane_x(lane);
+            let (ya, yb) = (y_of(s0), y_of(s1));
+            b.aabb_box(
+                Point3::new(x0, ya.min(yb), h - thick),
+                Point3::new(x1, ya.max(yb), h),
+                inst,
+            );
+        };
+        match m.shape {
+            StairShape::Straight => {
+                for i in 1..self.n {
+                    let s0 = self.end + STAIR_RUN * (i - 1) as f64;
+                    let h = z + self.rise * i as f64;
+                    tread(b, m.first_lane, s0, s0 + STAIR_RUN, h, self.rise + 0.03);
+                }
+            }
+            StairShape::Switchback => {
+                let f1 = STAIR_RUN * (self.nh - 1) as f64;
+                for i in 1..self.nh {
+                    let s0 = self.end + STAIR_RUN * (i - 1) as f64;
+                    let h = z + self.rise_h * i as f64;
+                    tread(b, m.first_lane, s0, s0 + STAIR_RUN, h, self.rise_h + 0.03);
+                }
+                let (ya, yb) = (y_of(self.end + f1), y_of(self.end + f1 + HALF_LANDING));
+                let hz = z + 0.5 * self.level_h;
+                b.aabb_box(
+                    Point3::new(0.5 * t, ya.min(yb), hz - slab),
+                    Point3::new(self.cw - 0.5 * t, ya.max(yb), hz),
+                    inst,
+                );
+                for j in 1..self.nh {
+                    let s1 = self.end + f1 - STAIR_RUN * (j - 1) as f64;
+                    let h = hz + self.rise_h * j as f64;
+                    tread(b, m.last_lane(), s1 - STAIR_RUN, s1, h, self.rise_h + 0.03);
+                }
+            }
+        }
+    }
+
+    /// The landing slab of the core at one end (south or north).
+    fn end_rect(&self, south: bool) -> Rect {
+        if south {
+            Rect {
+                x0: 0.0,
+                y0: 0.0,
+                x1: self.cw,
+                y1: self.end,
+            }
+        } else {
+            Rect {
+                x0: 0.0,
+                y0: self.sd - self.end,
+                x1: self.cw,
+                y1: self.sd,
+            }
+        }
+    }
+}
+
+/// Draws the stairs of a house of `floors` floors, bottom up: each storey
+/// gets a straight or a switchback stair with probability 1/2; the first
+/// flight of a stair takes the lane beside the last flight of the stair
+/// below (a flight never runs right above the top of the one below, which
+/// keeps more than a storey height minus a riser of head room over every
+/// flight and landing).
+fn draw_stairs(rng: &mut ChaCha8Rng, floors: usize) -> Vec<StairModule> {
+    let mut out: Vec<StairModule> = Vec::new();
+    for _ in 1..floors {
+        let shape = if rng.random::<bool>() {
+            StairShape::Straight
+        } else {
+            StairShape::Switchback
+        };
+        let (south, first_lane) = match out.last() {
+            None => (true, rng.random_range(0..2usize)),
+            Some(p) => (p.arrives_south(), 1 - p.last_lane()),
+        };
+        out.push(StairModule {
+            shape,
+            south,
+            first_lane,
+        });
+    }
+    out
+}
+
+/// Floor class (1-4) of an HM3D house (four or more floors: 4).
+fn floor_class(floors: u32) -> u32 {
+    floors.clamp(1, MAX_FLOORS)
+}
+
+/// The generator's first draws: a floor class from [`HM3D_FLOOR_COUNTS`]
+/// (or `floors` when given), then an HM3D validation house of that class,
+/// uniformly (all houses when the statistics hold none of that class).
+fn draw_house<'a>(
+    rng: &mut ChaCha8Rng,
+    stats: &'a HouseStats,
+    floors: Option<u32>,
+) -> Option<&'a HouseSize> {
     if stats.houses.is_empty() {
         return None;
     }
+    let classes: Vec<(u32, f64)> = HM3D_FLOOR_COUNTS
+        .iter()
+        .enumerate()
+        .map(|(i, &c)| (i as u32 + 1, f64::from(c)))
+        .collect();
+    let drawn = weighted_pick(rng, &classes).unwrap_or(1);
+    let class = floors.map_or(drawn, floor_class);
+    let of_class: Vec<&HouseSize> = stats
+        .houses
+        .iter()
+        .filter(|h| floor_class(h.floors) == class)
+        .collect();
+    if of_class.is_empty() {
+        stats.houses.get(rng.random_range(0..stats.houses.len()))
+    } else {
+        of_class.get(rng.random_range(0..of_class.len())).copied()
+    }
+}
+
+/// The HM3D house (floors, rooms, navigable area) that the house of `seed`
+/// imitates with the default configuration (`floors: None`): the
+/// generator's first draws, a floor class from HM3D's floor counts
+/// ([`HM3D_FLOOR_COUNTS`]) and a validation house of that class
+/// (`None` without houses). The house gets `min(floors, 4)` floors.
+pub fn house_record(seed: u64, stats: &HouseStats) -> Option<&HouseSize> {
+    house_record_for(seed, stats, None)
+}
+
+/// [`house_record`] for a configuration's `floors` (a given number of floors
+/// imitates a validation house of that floor class).
+pub fn house_record_for(seed: u64, stats: &HouseStats, floors: Option<u32>) -> Option<&HouseSize> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    stats.houses.get(rng.random_range(0..stats.houses.len()))
+    draw_house(&mut rng, stats, floors)
 }
 
 /// Generates a procedural house as a [`Scene`] (see the module docs).
@@ -558,10 +826,30 @@ pub fn house_record(seed: u64, stats: &HouseStats) -> Option<&HouseSize> {
 /// if the embedded statistics are unusable.
 ///
 /// # Complexity
-/// O(R^2 + F) for R rooms and F furniture pieces (placement by rejection
-/// sampling with a bounded number of attempts).
+/// O(R^2 + F + S) for R rooms, F furniture pieces (placement by rejection
+/// sampling with a bounded number of attempts) and S stair treads.
 pub fn generate(seed: u64, config: &ProceduralConfig) -> Result<Scene, SceneError> {
     generate_with_stats(seed, config, HouseStats::embedded()?)
+}
+
+/// Rooms per floor: `n` rooms dealt as evenly as possible, lower floors
+/// first, the ground floor at least two when the house has stairs.
+fn rooms_per_floor(n: usize, floors: usize) -> Vec<usize> {
+    let mut counts: Vec<usize> = (0..floors)
+        .map(|f| n / floors + usize::from(f < n % floors))
+        .collect();
+    if floors > 1 {
+        while counts[0] < 2 {
+            match (1..floors).rev().find(|&f| counts[f] > 1) {
+                Some(f) => {
+                    counts[f] -= 1;
+                    counts[0] += 1;
+                }
+                None => break,
+            }
+        }
+    }
+    counts
 }
 
 /// [`generate`] with explicit statistics.
@@ -576,41 +864,50 @@ pub fn generate_with_stats(
     config.validate()?;
     stats.validate()?;
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let house = &stats.houses[rng.random_range(0..stats.houses.len())];
-    let floors = config.floors.unwrap_or(house.floors.clamp(1, 2)) as usize;
+    let house = draw_house(&mut rng, stats, config.floors)
+        .ok_or_else(|| SceneError::Invalid("statistics without houses".into()))?;
+    let floors = config.floors.unwrap_or(floor_class(house.floors)) as usize;
     let t = config.wall_thickness;
-    let level_h = config.wall_height + config.floor_thickness;
-    // stairs geometry (two floors)
-    let n_steps = (level_h / 0.18).ceil() as usize;
-    let rise = level_h / n_steps as f64;
-    let run = 0.26;
-    let landing_len = 1.5;
-    let sw = 1.3;
-    let sd = landing_len + run * n_steps as f64;
+    let g = StairGeom::new(config);
+    let level_h = g.level_h;
+    let stairs = draw_stairs(&mut rng, floors);
+    // end of the core where each floor's landing lies (south?)
+    let ends: Vec<bool> = (0..floors)
+        .map(|f| {
+            if f == 0 {
+                true
+            } else {
+                stairs[f - 1].arrives_south()
+            }
+        })
+        .collect();
 
-    // room budget: the stairwell of a two-floor house (stair block below,
-    // landing above) counts as one Hall/stairwell room
-    let stairwell = floors == 2;
+    // room budget: the stairwell (core on every floor, strip beside it
+    // upstairs) counts as one Hall/stairwell room
+    let stairwell = floors > 1;
     let structural = usize::from(stairwell);
-    let min_sampled = if stairwell { 3 } else { 1 };
+    let min_sampled = if stairwell { floors + 1 } else { 1 };
     let cap = config.max_rooms_per_floor as usize * floors;
     let n_sampled = (house.rooms as usize)
         .saturating_sub(structural)
         .max(min_sampled)
         .min(cap.max(min_sampled));
     let types = sample_room_types(&mut rng, stats, n_sampled, stairwell);
+    let counts = rooms_per_floor(n_sampled, floors);
 
-    // footprint: navigable area times FOOTPRINT_PER_NAVIGABLE, at least
-    // MIN_ROOM_AREA per room, shared by the floors
-    let n_ground = if stairwell {
-        n_sampled.div_ceil(2).clamp(2, n_sampled - 1)
+    // footprint: navigable area times FOOTPRINT_PER_NAVIGABLE shared by the
+    // floors, at least MIN_ROOM_AREA per room plus the stairwell core
+    // half the stairwell's void is added to each floor (calibrated: the
+    // walkable area follows HM3D's and few rooms are lost, see the
+    // `procedural_stats` test)
+    let (core_area, hole_area) = if stairwell {
+        (g.cw * g.sd, 0.5 * g.cw * (g.sd - g.end))
     } else {
-        n_sampled
+        (0.0, 0.0)
     };
-    let stair_area = if stairwell { sw * sd } else { 0.0 };
-    let per_floor = (house.navigable_area * FOOTPRINT_PER_NAVIGABLE / floors as f64)
-        .max(n_ground as f64 * MIN_ROOM_AREA + stair_area)
-        .max((n_sampled - n_ground) as f64 * MIN_ROOM_AREA + stair_area)
+    let most = counts.iter().copied().max().unwrap_or(1);
+    let per_floor = (house.navigable_area * FOOTPRINT_PER_NAVIGABLE / floors as f64 + hole_area)
+        .max(most as f64 * MIN_ROOM_AREA + core_area)
         .clamp(30.0, 500.0);
     let aspect = rng.random_range(1.0..1.6);
     let mut w = (per_floor * aspect).sqrt();
@@ -620,21 +917,24 @@ pub fn generate_with_stats(
     }
     let (w, d) = (
         w.max(if stairwell {
-            sw + 2.0 * config.min_room_side
+            g.cw + 2.0 * config.min_room_side
         } else {
             6.0
         }),
-        d.max(if stairwell { sd + 2.6 } else { 6.0 }),
+        d.max(if stairwell { g.sd + 2.6 } else { 6.0 }),
     );
 
-    // types per floor: ground-floor types first; within a floor the sampling
-    // order (anchors first) is kept, so that a layout with fewer leaves than
-    // types drops extra rooms first
+    // types per floor: ground-floor types first (bedrooms end up on the
+    // upper floors); within a floor the sampling order (anchors first) is
+    // kept, so that a layout with fewer leaves than types drops extra rooms
+    // first
     let mut order: Vec<usize> = (0..types.len()).collect();
     order.sort_by_key(|&i| (ground_rank(types[i]), i));
     let mut idx_floor: Vec<Vec<usize>> = vec![Vec::new(); floors];
-    for (k, &i) in order.iter().enumerate() {
-        idx_floor[usize::from(stairwell && k >= n_ground)].push(i);
+    let mut k = 0;
+    for (f, &c) in counts.iter().enumerate() {
+        idx_floor[f].extend_from_slice(&order[k..k + c]);
+        k += c;
     }
     let by_floor: Vec<Vec<RoomType>> = idx_floor
         .into_iter()
@@ -644,44 +944,50 @@ pub fn generate_with_stats(
         })
         .collect();
 
+    let core = Rect {
+        x0: 0.0,
+        y0: 0.0,
+        x1: g.cw,
+        y1: g.sd,
+    };
     let mut plan: Vec<Vec<FloorRoom>> = Vec::new();
     for (f, floor_types) in by_floor.into_iter().enumerate() {
         let mut rooms = Vec::new();
         let areas: Vec<Rect> = if stairwell {
             rooms.push(FloorRoom {
-                rect: Rect {
-                    x0: 0.0,
-                    y0: 0.0,
-                    x1: sw,
-                    y1: sd,
+                rect: core,
+                room_type: if f == 0 {
+                    RoomType::Stairs
+                } else {
+                    RoomType::Hallway
                 },
-                room_type: RoomType::Stairs,
                 stair: true,
                 landing: false,
             });
             if f == 0 {
                 // ground floor: a strip across the whole house above the
-                // stair block and the area beside it
+                // core and the area beside it
                 vec![
                     Rect {
                         x0: 0.0,
-                        y0: sd,
+                        y0: g.sd,
                         x1: w,
                         y1: d,
                     },
                     Rect {
-                        x0: sw,
+                        x0: g.cw,
                         y0: 0.0,
                         x1: w,
-                        y1: sd,
+                        y1: g.sd,
                     },
                 ]
             } else {
+                // upper floors: a landing strip beyond the core's north end
                 rooms.push(FloorRoom {
                     rect: Rect {
                         x0: 0.0,
-                        y0: sd,
-                        x1: sw,
+                        y0: g.sd,
+                        x1: g.cw,
                         y1: d,
                     },
                     room_type: RoomType::Hallway,
@@ -689,7 +995,7 @@ pub fn generate_with_stats(
                     landing: true,
                 });
                 vec![Rect {
-                    x0: sw,
+                    x0: g.cw,
                     y0: 0.0,
                     x1: w,
                     y1: d,
@@ -743,6 +1049,7 @@ pub fn generate_with_stats(
     // doors
     let mut openings: Vec<Vec<Opening>> = Vec::new();
     for (f, rooms) in plan.iter().enumerate() {
+        let south = ends[f];
         let mut cands: Vec<Opening> = Vec::new();
         let mut forced: Vec<Opening> = Vec::new();
         for i in 0..rooms.len() {
@@ -752,7 +1059,8 @@ pub fn generate_with_stats(
                 };
                 let (a, b) = (&rooms[i], &rooms[j]);
                 if (a.stair && b.landing) || (a.landing && b.stair) {
-                    if f == 1 {
+                    // the landing strip opens onto a north landing
+                    if !south {
                         forced.push(Opening {
                             seg: s,
                             open: true,
@@ -762,15 +1070,16 @@ pub fn generate_with_stats(
                     continue;
                 }
                 if a.stair || b.stair {
-                    if f == 1 {
-                        continue; // railing around the stairwell
-                    }
-                    // ground floor: only beside the foot of the stairs
-                    // (never across the top end, which is a storey up)
+                    // the core opens only beside its landing on this floor
+                    // (the rest of its side is a void or a flight)
                     if s.axis != 1 {
                         continue;
                     }
-                    s.hi = s.hi.min(landing_len);
+                    if south {
+                        s.hi = s.hi.min(g.end);
+                    } else {
+                        s.lo = s.lo.max(g.sd - g.end);
+                    }
                 }
                 let margin = 0.05 + t * 0.5;
                 if s.hi - s.lo < config.door_width + 2.0 * margin {
@@ -869,29 +1178,33 @@ pub fn generate_with_stats(
         });
         let top = f + 1 == floors;
         for (ri, r) in rooms.iter().enumerate() {
-            let name = if r.stair {
+            let name = if r.stair && f == 0 {
                 STAIRWELL.to_string()
-            } else if r.landing {
+            } else if r.stair || r.landing {
                 STAIRWELL_LANDING.to_string()
             } else {
                 format!("{} {}", r.room_type.label(), ri)
             };
-            // the void above the stairs is part of the stairwell below
-            if !(r.stair && f > 0) {
-                rooms_out.push(Room {
-                    name: name.clone(),
-                    room_type: r.room_type,
-                    level: f,
-                    polygon: r.rect.polygon(),
-                    floor_z: z,
-                });
-                let fl = b.add_instance(InstanceKind::Floor, "floor", &name, f);
-                b.aabb_box(
-                    Point3::new(r.rect.x0, r.rect.y0, z - config.floor_thickness),
-                    Point3::new(r.rect.x1, r.rect.y1, z),
-                    fl,
-                );
-            }
+            rooms_out.push(Room {
+                name: name.clone(),
+                room_type: r.room_type,
+                level: f,
+                polygon: r.rect.polygon(),
+                floor_z: z,
+            });
+            // upstairs the core has a floor only at its landing end (the
+            // rest is the stairwell's void)
+            let slab = if r.stair && f > 0 {
+                g.end_rect(ends[f])
+            } else {
+                r.rect
+            };
+            let fl = b.add_instance(InstanceKind::Floor, "floor", &name, f);
+            b.aabb_box(
+                Point3::new(slab.x0, slab.y0, z - config.floor_thickness),
+                Point3::new(slab.x1, slab.y1, z),
+                fl,
+            );
             if top {
                 let c = b.add_instance(InstanceKind::Ceiling, "ceiling", &name, f);
                 b.horizontal_polygon(&r.rect.polygon(), z + config.wall_height, false, c);
@@ -899,20 +1212,15 @@ pub fn generate_with_stats(
         }
         build_walls(&mut b, rooms, &openings[f], f, z, config);
     }
-    if floors == 2 {
-        let st = b.add_instance(InstanceKind::Stairs, "stairs", "Staircase", 0);
-        let y0 = sd - run * n_steps as f64;
-        for i in 0..n_steps {
-            let ya = y0 + run * i as f64;
-            let yb = if i + 1 == n_steps { sd } else { ya + run };
-            b.aabb_box(
-                Point3::new(t * 0.5, ya, 0.0),
-                Point3::new(sw - t * 0.5, yb, rise * (i + 1) as f64),
-                st,
-            );
-        }
+    for (f, m) in stairs.iter().enumerate() {
+        let name = if f == 0 {
+            "Staircase".to_string()
+        } else {
+            format!("Staircase {f}")
+        };
+        let st = b.add_instance(InstanceKind::Stairs, "stairs", &name, f);
+        g.build(&mut b, st, m, f as f64 * level_h, t, config.floor_thickness);
     }
-
     // furniture: object lists drawn per room from its own type's statistics
     // (the stairwell and its landing stay empty); with shuffled semantics the
     // lists are then dealt to the rooms in random order, which keeps the
