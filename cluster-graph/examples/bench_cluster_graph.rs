@@ -85,6 +85,7 @@ fn main() {
         .map(|_| {
             let p = point(&mut rng);
             ObjectSummary {
+                level: None,
                 label: LABELS[rng.random_range(0..LABELS.len())].into(),
                 support: rng.random_range(0..500),
                 centre: Point3::new(p.x, p.y, 0.8),

@@ -177,8 +177,8 @@ fn qualifying<O: ContextObject>(
 /// use nalgebra::{Point2, Point3};
 /// use sornav_cluster_graph::{ClusterConfig, ObjectSummary, robot_context};
 ///
-/// let bed = ObjectSummary { label: "bed".into(), support: 400, centre: Point3::new(3.0, 0.0, 0.5) };
-/// let far = ObjectSummary { label: "sofa".into(), support: 900, centre: Point3::new(30.0, 0.0, 0.4) };
+/// let bed = ObjectSummary { level: None, label: "bed".into(), support: 400, centre: Point3::new(3.0, 0.0, 0.5) };
+/// let far = ObjectSummary { level: None, label: "sofa".into(), support: 900, centre: Point3::new(30.0, 0.0, 0.4) };
 /// let s_r = robot_context(Point2::origin(), &[bed, far], &ClusterConfig::default());
 /// assert_eq!(s_r.objects.len(), 1);
 /// assert_eq!(s_r.objects[0].label, "bed");
@@ -202,8 +202,9 @@ pub fn robot_context_on_level<O: ContextObject>(
     objects: &[O],
     config: &crate::ClusterConfig,
 ) -> RobotContext {
-    let (kept, rejected_non_finite) =
-        qualifying(objects, config.n_min, config.r_r, level, |xy| (xy - robot).norm());
+    let (kept, rejected_non_finite) = qualifying(objects, config.n_min, config.r_r, level, |xy| {
+        (xy - robot).norm()
+    });
     RobotContext {
         objects: kept
             .into_iter()
@@ -237,13 +238,18 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
             .cluster(k)
             .ok_or(ClusterError::UnknownCluster(k.0, self.len()))?;
         let members = &cluster.member_positions;
-        let (kept, rejected_non_finite) =
-            qualifying(objects, self.config().n_min, self.config().r_s, Some(cluster.level), |xy| {
+        let (kept, rejected_non_finite) = qualifying(
+            objects,
+            self.config().n_min,
+            self.config().r_s,
+            Some(cluster.level),
+            |xy| {
                 members
                     .iter()
                     .map(|m| (xy - m).norm())
                     .fold(f64::INFINITY, f64::min)
-            });
+            },
+        );
         Ok(ClusterContext {
             cluster: k,
             objects: kept
@@ -290,6 +296,7 @@ mod tests {
 
     fn obj(label: &str, support: usize, x: f64, y: f64) -> ObjectSummary {
         ObjectSummary {
+            level: None,
             label: label.into(),
             support,
             centre: Point3::new(x, y, 1.5),
@@ -324,6 +331,7 @@ mod tests {
         // member is 11 m away: excluded. Height is ignored.
         let objects = [
             ObjectSummary {
+                level: None,
                 label: "toilet".into(),
                 support: 30,
                 centre: Point3::new(10.0, 9.0, 40.0),

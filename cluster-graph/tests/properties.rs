@@ -338,6 +338,7 @@ proptest! {
     ) {
         const LABELS: [&str; 4] = ["bed", "toilet", "sofa", "tv"];
         let objects: Vec<ObjectSummary> = raw.iter().map(|&(l, n, x, y, nan)| ObjectSummary {
+            level: None,
             label: LABELS[l].into(),
             support: n,
             centre: Point3::new(if nan == 0 { f64::NAN } else { x }, y, f64::from(nan)),

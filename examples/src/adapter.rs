@@ -32,7 +32,7 @@
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
-use nalgebra::{Point2, Point3};
+use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 use sornav::executor::{FailureReason, MissionId, MissionKind, MissionStatus, RobotPose};
 use sornav::semantic_map::{LabelId, PinholeCamera, optical_pose};
@@ -457,9 +457,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
         // level's grid, the approach to a stair or a stair's surface (the
         // start cell may be inside the inflation margin).
         let start_cell = cell(feet.x, feet.y);
-        let traversable = |q: &Point3<f64>| {
-            cell(q.x, q.y) == start_cell || agent.is_traversable(q)
-        };
+        let traversable = |q: &Point3<f64>| cell(q.x, q.y) == start_cell || agent.is_traversable(q);
         self.follower.config_mut().sample_spacing_m = resolution / 2.0;
         self.follower.next_action(feet, yaw, &traversable)
     }

@@ -169,8 +169,15 @@ fn check_two_levels(walker: &mut Walker, scene: &Scene) {
                 for dy in -4..=4 {
                     let row: Vec<String> = (-4..=4)
                         .map(|dx| {
-                            let v = walker.map.surfaces_at(p.x + 0.1 * f64::from(dx), p.y + 0.1 * f64::from(dy));
-                            format!("{:?}", v.iter().map(|z| (z * 100.0).round() as i32).collect::<Vec<_>>())
+                            let v = walker
+                                .map
+                                .surfaces_at(p.x + 0.1 * f64::from(dx), p.y + 0.1 * f64::from(dy));
+                            format!(
+                                "{:?}",
+                                v.iter()
+                                    .map(|z| (z * 100.0).round() as i32)
+                                    .collect::<Vec<_>>()
+                            )
                         })
                         .collect();
                     eprintln!("{}", row.join(" "));
@@ -189,7 +196,11 @@ fn check_two_levels(walker: &mut Walker, scene: &Scene) {
     );
     let s = joining.unwrap();
     // The stair climbs the storey in steps the robot can take.
-    assert!(s.path.windows(2).all(|w| (w[1].z - w[0].z).abs() <= 0.2 + 1e-6));
+    assert!(
+        s.path
+            .windows(2)
+            .all(|w| (w[1].z - w[0].z).abs() <= 0.2 + 1e-6)
+    );
     assert!(s.length >= (z1 - z0) - 1e-6);
 }
 

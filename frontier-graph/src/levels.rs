@@ -370,9 +370,10 @@ impl MultiLevelMap {
     }
 
     fn add_level(&mut self, floor_z: f64) -> Result<LevelId, FrontierError> {
-        let id = LevelId(u16::try_from(self.maps.len()).map_err(|_| {
-            FrontierError::InvalidConfig("more than 65 535 levels".into())
-        })?);
+        let id = LevelId(
+            u16::try_from(self.maps.len())
+                .map_err(|_| FrontierError::InvalidConfig("more than 65 535 levels".into()))?,
+        );
         if id.0 == 0xFFFF {
             return Err(FrontierError::InvalidConfig(
                 "more than 65 534 levels".into(),
@@ -591,11 +592,16 @@ impl MultiLevelMap {
                     position: e.position,
                 });
                 if e.level.is_none() {
-                    hubs.stair_frontiers
-                        .insert(stair_frontier_id(&self.surfaces, &e.position), (ends[k], si));
+                    hubs.stair_frontiers.insert(
+                        stair_frontier_id(&self.surfaces, &e.position),
+                        (ends[k], si),
+                    );
                 }
             }
-            let (up, down) = (self.cfg.levels.stair_cost_up, self.cfg.levels.stair_cost_down);
+            let (up, down) = (
+                self.cfg.levels.stair_cost_up,
+                self.cfg.levels.stair_cost_down,
+            );
             let way = Way {
                 cost: s.length + up,
                 reverse_cost: s.length + down,
@@ -677,7 +683,10 @@ impl MultiLevelMap {
         };
         let span = (s.upper.position.z - s.lower.position.z).abs().max(1e-9);
         let frac_up = ((s.upper.position.z - p.z) / span).clamp(0.0, 1.0);
-        let (up, down) = (self.cfg.levels.stair_cost_up, self.cfg.levels.stair_cost_down);
+        let (up, down) = (
+            self.cfg.levels.stair_cost_up,
+            self.cfg.levels.stair_cost_down,
+        );
         let mk = |pts: Vec<Point3<f64>>, climb: f64, descend: f64| {
             let mut path = vec![*p];
             path.extend(pts);
@@ -749,7 +758,10 @@ impl MultiLevelMap {
         if g.home.is_some() {
             access.insert(
                 NodeId::Home,
-                (Some(LevelId(0)), self.level_access(LevelId(0), NodeId::Home)),
+                (
+                    Some(LevelId(0)),
+                    self.level_access(LevelId(0), NodeId::Home),
+                ),
             );
         }
         for m in &self.maps {
@@ -757,7 +769,10 @@ impl MultiLevelMap {
                 g.frontiers.insert(n.id, n.clone());
                 access.insert(
                     NodeId::Frontier(n.id),
-                    (Some(m.level()), self.level_access(m.level(), NodeId::Frontier(n.id))),
+                    (
+                        Some(m.level()),
+                        self.level_access(m.level(), NodeId::Frontier(n.id)),
+                    ),
                 );
             }
         }
@@ -767,11 +782,7 @@ impl MultiLevelMap {
                 continue;
             };
             let s = &stairs[si];
-            let level = s
-                .lower
-                .level
-                .or(s.upper.level)
-                .unwrap_or(LevelId(0));
+            let level = s.lower.level.or(s.upper.level).unwrap_or(LevelId(0));
             g.frontiers.insert(
                 id,
                 FrontierNode {
@@ -830,7 +841,9 @@ impl MultiLevelMap {
                 ) else {
                     continue;
                 };
-                let Some(mid) = self.hubs.way(p, q) else { continue };
+                let Some(mid) = self.hubs.way(p, q) else {
+                    continue;
+                };
                 let mut way = w1.clone();
                 append(&mut way, &mid);
                 append(&mut way, &w2.reversed());
@@ -899,7 +912,10 @@ impl MultiLevelMap {
         {
             return self.maps[usize::from(a.0)].path(&from.xy(), &to.xy());
         }
-        let access = |me: &mut Self, loc: Option<Location>, p: &Point3<f64>| -> Result<Vec<(usize, Way)>, FrontierError> {
+        let access = |me: &mut Self,
+                      loc: Option<Location>,
+                      p: &Point3<f64>|
+         -> Result<Vec<(usize, Way)>, FrontierError> {
             Ok(match loc {
                 Some(Location::Level(l)) => {
                     let mut out = Vec::new();

@@ -162,7 +162,11 @@ pub(crate) fn extract(map: &SurfaceMap, levels: &[f64], p: &Params) -> Extractio
                 .iter()
                 .enumerate()
                 .filter(|(_, h)| (f64::from(z) - **h).abs() <= f64::from(p.level_tolerance))
-                .min_by(|a, b| (f64::from(z) - a.1).abs().total_cmp(&(f64::from(z) - b.1).abs()))
+                .min_by(|a, b| {
+                    (f64::from(z) - a.1)
+                        .abs()
+                        .total_cmp(&(f64::from(z) - b.1).abs())
+                })
                 .map(|(l, _)| l);
             match on {
                 Some(l) => v.push((z, Kind::On(l))),
@@ -396,7 +400,8 @@ fn chain(
     rev.push(point(map, start_col, hs));
     rev.reverse();
     let length = rev.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-    let mut columns: Vec<(ColumnKey, f32)> = walk.keys().map(|(k, z)| (*k, f32::from_bits(*z))).collect();
+    let mut columns: Vec<(ColumnKey, f32)> =
+        walk.keys().map(|(k, z)| (*k, f32::from_bits(*z))).collect();
     columns.sort_by(|a, b| a.0.cmp(&b.0).then(a.1.total_cmp(&b.1)));
     let first = rev[0];
     let last = *rev.last()?;

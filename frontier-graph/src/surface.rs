@@ -93,9 +93,7 @@ impl Column {
         if iv.len() > MAX_INTERVALS {
             // Merge the two closest neighbours (bounded memory).
             let j = (0..iv.len() - 1)
-                .min_by(|&a, &b| {
-                    (iv[a + 1].lo - iv[a].hi).total_cmp(&(iv[b + 1].lo - iv[b].hi))
-                })
+                .min_by(|&a, &b| (iv[a + 1].lo - iv[a].hi).total_cmp(&(iv[b + 1].lo - iv[b].hi)))
                 .unwrap_or(0);
             let up = iv.remove(j + 1);
             iv[j].hi = up.hi;
@@ -158,7 +156,12 @@ impl SurfaceMap {
     /// Adds the returns of one scan from `origin`; returns farther than
     /// `max_range` are ignored (they are truncated rays, not surfaces).
     /// Points must be finite (checked by the caller).
-    pub(crate) fn integrate(&mut self, origin: &Point3<f64>, points: &[Point3<f64>], max_range: f64) {
+    pub(crate) fn integrate(
+        &mut self,
+        origin: &Point3<f64>,
+        points: &[Point3<f64>],
+        max_range: f64,
+    ) {
         for p in points {
             if (p - origin).norm() > max_range {
                 continue;

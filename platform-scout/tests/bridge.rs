@@ -197,7 +197,11 @@ fn unlabelled_returns_feed_occupancy_only() {
     assert_eq!(evidence.hits(), 1);
     // Every return reached the occupancy grid, the terrain cell at its
     // height above the floor (in the obstacle band).
-    let grid = a.frontier_map().grid();
+    let grid = a
+        .frontier_map()
+        .level_map(sornav::frontier_graph::LevelId(0))
+        .unwrap()
+        .grid();
     for (x, y) in [(1.025, 0.025), (2.025, 1.025), (3.025, 0.025)] {
         let cell = grid.cell_of(&Point2::new(x, y)).unwrap();
         assert!(

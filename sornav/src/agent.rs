@@ -358,7 +358,8 @@ impl Agent {
     /// The level the robot stands on (`None` on a stair or before the
     /// first observation).
     pub fn current_level(&self) -> Option<LevelId> {
-        self.pose.and_then(|p| self.frontiers.level_at(p.position.z))
+        self.pose
+            .and_then(|p| self.frontiers.level_at(p.position.z))
     }
 
     /// Whether the robot can stand at `feet` on the agent's own map: a
@@ -472,7 +473,10 @@ impl Agent {
             self.config.frontier.grid.resolution,
             &mut points,
         );
-        let update = match self.frontiers.update(&observation.pose.position, &origin, &points) {
+        let update = match self
+            .frontiers
+            .update(&observation.pose.position, &origin, &points)
+        {
             Ok(u) => u,
             Err(e) => {
                 self.stats.refused_observations += 1;
@@ -818,11 +822,8 @@ impl Agent {
             .unwrap_or_default();
         self.frontiers.frontier_graph(&pose.position)?;
         // Read after the refresh, which may have found new levels.
-        let levels: BTreeMap<LevelId, f64> = self
-            .frontiers
-            .levels()
-            .map(|l| (l.id, l.floor_z))
-            .collect();
+        let levels: BTreeMap<LevelId, f64> =
+            self.frontiers.levels().map(|l| (l.id, l.floor_z)).collect();
         let graph = self.frontiers.graph();
         if let Some((_, m)) = self.executor.active()
             && let MissionKind::Explore { frontier } = m.kind
@@ -1103,8 +1104,7 @@ impl Agent {
         let floors: Vec<f64> = self.frontiers.levels().map(|l| l.floor_z).collect();
         let top = floors.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let bottom = floors.iter().copied().fold(f64::INFINITY, f64::min);
-        self.config.frontier.levels.allow_stairs
-            && (lo.z >= top + half || hi.z <= bottom - half)
+        self.config.frontier.levels.allow_stairs && (lo.z >= top + half || hi.z <= bottom - half)
     }
 
     /// A candidate on an unmapped floor is approached over the stairs: the
@@ -1176,10 +1176,7 @@ impl Agent {
                     label,
                     support: c.support,
                     centre: c.centre,
-                    level: self
-                        .frontiers
-                        .level_containing(c.bounds.min.z)
-                        .map(|l| l.0),
+                    level: self.frontiers.level_containing(c.bounds.min.z).map(|l| l.0),
                 })
             })
             .collect()

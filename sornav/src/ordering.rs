@@ -345,9 +345,9 @@ mod tests {
             let graph = map.frontier_graph(&Point2::origin()).unwrap();
             let excluded = BTreeSet::new();
             let objects = [
-                ObjectSummary { label: "sink".into(), support: 50, centre: Point3::new(sx, sy, 0.8) },
-                ObjectSummary { label: "bathtub".into(), support: 200, centre: Point3::new(sx + 0.5, sy, 0.3) },
-                ObjectSummary { label: "bed".into(), support: 5, centre: Point3::new(-sx, -sy, 0.3) },
+                ObjectSummary { level: None, label: "sink".into(), support: 50, centre: Point3::new(sx, sy, 0.8) },
+                ObjectSummary { level: None, label: "bathtub".into(), support: 200, centre: Point3::new(sx + 0.5, sy, 0.3) },
+                ObjectSummary { level: None, label: "bed".into(), support: 5, centre: Point3::new(-sx, -sy, 0.3) },
             ];
             let input = input(graph, &excluded, &objects);
             let weights = SemanticRankingConfig { relevance_weight: w, distance_weight: 1.0 };

@@ -53,6 +53,7 @@ fn region() -> RegionContext {
         clusters: (0..14u64)
             .map(|k| ClusterCandidate {
                 candidate: Candidate {
+                    floor: 0,
                     cluster_id: k,
                     distance_m: 3.0 + k as f64 * 2.5,
                     context: (0..10)

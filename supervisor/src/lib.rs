@@ -50,7 +50,7 @@
 //!         .map(|l| ContextObject::new(l, 200.0))
 //!         .to_vec(),
 //!     clusters: vec![ClusterCandidate {
-//!         candidate: Candidate {
+//!         candidate: Candidate { floor: 0,
 //!             cluster_id: 7,
 //!             distance_m: 6.0,
 //!             context: vec![

@@ -90,6 +90,7 @@ fn clusters(u_geo: &[f64]) -> Vec<ClusterCandidate> {
         .enumerate()
         .map(|(i, &u)| ClusterCandidate {
             candidate: Candidate {
+                floor: 0,
                 cluster_id: i as u64 * 3 + 1,
                 distance_m: 2.0 + i as f64,
                 context: vec![],

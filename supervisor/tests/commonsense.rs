@@ -21,6 +21,7 @@ fn ctx(labels: &[&str]) -> Vec<ContextObject> {
 
 fn cand(id: u64, d: f64, labels: &[&str]) -> Candidate {
     Candidate {
+        floor: 0,
         cluster_id: id,
         distance_m: d,
         context: labels
@@ -232,7 +233,7 @@ prop_compose! {
             candidates: cands
                 .into_iter()
                 .filter(|(id, _, _)| seen.insert(*id))
-                .map(|(id, d, objs)| Candidate {
+                .map(|(id, d, objs)| Candidate { floor: 0,
                     cluster_id: id,
                     distance_m: d,
                     context: objs.iter().map(|&(l, s, r)| CandidateObject::new(LABELS[l], s, r)).collect(),

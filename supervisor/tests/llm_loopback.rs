@@ -48,6 +48,7 @@ fn snapshot() -> RegionSnapshot {
             .to_vec(),
         candidates: vec![
             Candidate {
+                floor: 0,
                 cluster_id: 7,
                 distance_m: 6.5,
                 context: vec![
@@ -56,6 +57,7 @@ fn snapshot() -> RegionSnapshot {
                 ],
             },
             Candidate {
+                floor: 0,
                 cluster_id: 9,
                 distance_m: 14.0,
                 context: vec![CandidateObject::new("couch", 300.0, 1.0)],
@@ -487,7 +489,7 @@ mod properties {
                 Arc::new(Canned(content)),
             ).unwrap();
             let mut s = snapshot();
-            s.candidates = ids.iter().map(|&k| Candidate { cluster_id: k, distance_m: 1.0, context: vec![] }).collect();
+            s.candidates = ids.iter().map(|&k| Candidate { floor: 0, cluster_id: k, distance_m: 1.0, context: vec![] }).collect();
             let d = policy.decide(&s, &at(1, 0.0));
             if let Some(k) = d.relocation() {
                 prop_assert!(s.candidate(k).is_some());
