@@ -65,6 +65,7 @@
 //!     label: "toilet".into(),
 //!     support: 120,
 //!     centre: Point3::new(7.5, 6.0, 0.4),
+//!     level: None,
 //! }];
 //! let s_k = cg.cluster_context(cg.cluster_of(3).unwrap(), &objects)?;
 //! assert_eq!(s_k.objects[0].label, "toilet");

@@ -622,7 +622,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
                 self.trace.agent_end = "stop".to_owned();
                 Action::Stop
             }
-            AgentCommand::Exhausted => {
+            AgentCommand::Exhausted | AgentCommand::FloorExhausted { .. } => {
                 // Look all around once more before giving up: the camera
                 // may not have seen the floor next to the robot.
                 if self.exhausted_turns < self.turns as usize {

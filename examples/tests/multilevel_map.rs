@@ -108,6 +108,10 @@ impl Walker {
 }
 
 fn walk_up(scene: &Scene, max_step: f64) -> Walker {
+    walk(scene, max_step, false)
+}
+
+fn walk(scene: &Scene, max_step: f64, down: bool) -> Walker {
     let nav = NavMesh::build(
         scene,
         &NavMeshConfig {
@@ -130,7 +134,11 @@ fn walk_up(scene: &Scene, max_step: f64) -> Walker {
             .min_by(|a, b| (a.x + a.y).total_cmp(&(b.x + b.y)))
             .expect("a span on the level")
     };
-    let (start, top) = (pick(z0), pick(z1));
+    let (start, top) = if down {
+        (pick(z1), pick(z0))
+    } else {
+        (pick(z0), pick(z1))
+    };
     let path = nav
         .path(&start, &top)
         .expect("path query")
@@ -142,9 +150,16 @@ fn walk_up(scene: &Scene, max_step: f64) -> Walker {
     walker
 }
 
-fn check_two_levels(walker: &mut Walker, scene: &Scene) {
+fn check_two_levels(walker: &mut Walker, scene: &Scene, down: bool) {
+    let _ = walker
+        .map
+        .frontier_graph(&Point3::new(0.0, 0.0, 0.0))
+        .expect("graph");
     let levels: Vec<_> = walker.map.levels().collect();
-    let (z0, z1) = (scene.levels()[0].elevation, scene.levels()[1].elevation);
+    let (mut z0, mut z1) = (scene.levels()[0].elevation, scene.levels()[1].elevation);
+    if down {
+        std::mem::swap(&mut z0, &mut z1);
+    }
     assert!(levels.len() >= 2, "levels {levels:?}");
     assert!((levels[0].floor_z - z0).abs() < 0.1, "{levels:?}");
     assert!(
@@ -159,9 +174,14 @@ fn check_two_levels(walker: &mut Walker, scene: &Scene) {
         .find(|l| (l.floor_z - z1).abs() < 0.15)
         .map(|l| l.id)
         .unwrap_or(LevelId(1));
+    let (lo, hi) = if down {
+        (upper, LevelId(0))
+    } else {
+        (LevelId(0), upper)
+    };
     let joining = stairs
         .iter()
-        .find(|s| s.lower.level == Some(LevelId(0)) && s.upper.level == Some(upper));
+        .find(|s| s.lower.level == Some(lo) && s.upper.level == Some(hi));
     if joining.is_none() {
         for s in stairs {
             for e in [&s.lower, &s.upper] {
@@ -201,7 +221,7 @@ fn check_two_levels(walker: &mut Walker, scene: &Scene) {
             .windows(2)
             .all(|w| (w[1].z - w[0].z).abs() <= 0.2 + 1e-6)
     );
-    assert!(s.length >= (z1 - z0) - 1e-6);
+    assert!(s.length >= (z1 - z0).abs() - 1e-6);
 }
 
 #[test]
@@ -220,7 +240,9 @@ fn procedural_two_floor_house() {
             continue;
         }
         let mut walker = walk_up(&scene, 0.2);
-        check_two_levels(&mut walker, &scene);
+        check_two_levels(&mut walker, &scene, false);
+        let mut walker = walk(&scene, 0.2, true);
+        check_two_levels(&mut walker, &scene, true);
         tried += 1;
         if tried == 3 {
             break;

@@ -222,6 +222,12 @@ pub struct LevelConfig {
     /// pose's height, no surface map, no stairs — exactly the single-floor
     /// [`crate::FrontierMap`] (robots that cannot climb, 2-D users).
     pub allow_stairs: bool,
+    /// Keep the surface map and find stairs even when `allow_stairs` is
+    /// false, so that a robot that cannot climb can say where stairs lead
+    /// to another floor ([`crate::MultiLevelMap::stairs`]); they never enter
+    /// G_F then. `allow_stairs = false, detect_stairs = false` is exactly a
+    /// single [`crate::FrontierMap`].
+    pub detect_stairs: bool,
     /// Column size (m) of the walkable-surface map (default 0.1: two grid
     /// cells; a stair tread is 2-3 columns deep).
     pub surface_resolution: f64,
@@ -248,7 +254,8 @@ pub struct LevelConfig {
     /// Cost added for descending one stair (default 1).
     pub stair_cost_down: f64,
     /// A stair end is joined to the nearest traversable cell of its level
-    /// within this radius (m, default 0.6).
+    /// within this radius (m, default 0.8: the cells next to the first
+    /// step lie inside the inflation of the steps above them).
     pub portal_radius: f64,
 }
 
@@ -256,6 +263,7 @@ impl Default for LevelConfig {
     fn default() -> Self {
         Self {
             allow_stairs: true,
+            detect_stairs: true,
             surface_resolution: 0.1,
             level_tolerance: 0.08,
             robot_level_tolerance: 0.25,
@@ -264,7 +272,7 @@ impl Default for LevelConfig {
             min_stair_rise: 0.4,
             stair_cost_up: 2.0,
             stair_cost_down: 1.0,
-            portal_radius: 0.6,
+            portal_radius: 0.8,
         }
     }
 }

@@ -473,7 +473,12 @@ impl MultiLevelMap {
         }
         self.ensure_first_level(feet)?;
         if !self.cfg.levels.allow_stairs {
-            return self.maps[0].update(origin, points);
+            let stats = self.maps[0].update(origin, points)?;
+            if self.cfg.levels.detect_stairs {
+                self.surfaces
+                    .integrate(origin, points, self.cfg.grid.max_range);
+            }
+            return Ok(stats);
         }
         let level = match self.level_at(feet.z) {
             Some(l) => Some(l),
@@ -521,7 +526,7 @@ impl MultiLevelMap {
         };
         let floors: Vec<f64> = self.levels().map(|l| l.floor_z).collect();
         let mut found = extract(&self.surfaces, &floors, &params);
-        if !found.new_levels.is_empty() {
+        if !found.new_levels.is_empty() && self.cfg.levels.allow_stairs {
             for h in found.new_levels.clone() {
                 self.add_level(h)?;
             }
@@ -561,6 +566,9 @@ impl MultiLevelMap {
         self.ensure_first_level(robot)?;
         let xy = robot.xy();
         if !self.cfg.levels.allow_stairs {
+            if self.cfg.levels.detect_stairs {
+                self.refresh_stairs()?;
+            }
             self.composed = false;
             return self.maps[0].frontier_graph(&xy);
         }
@@ -919,13 +927,19 @@ impl MultiLevelMap {
             Ok(match loc {
                 Some(Location::Level(l)) => {
                     let mut out = Vec::new();
+                    // Each portal at the traversable cell it snapped to.
+                    let m = &me.maps[usize::from(l.0)];
                     let portals: Vec<(usize, Point3<f64>)> = me
                         .hubs
                         .hubs
                         .iter()
                         .enumerate()
-                        .filter(|(_, h)| h.level == Some(l) && h.portal.is_some())
-                        .map(|(i, h)| (i, h.position))
+                        .filter(|(_, h)| h.level == Some(l))
+                        .filter_map(|(i, h)| {
+                            let cell = m.graph().portals.get(&h.portal?)?.cell?;
+                            let c = m.grid().cell_center(cell);
+                            Some((i, Point3::new(c.x, c.y, h.position.z)))
+                        })
                         .collect();
                     for (i, q) in portals {
                         if let Some(e) = me.maps[usize::from(l.0)].path(&p.xy(), &q.xy())? {

@@ -300,14 +300,20 @@ impl FrontierMap {
     /// # Complexity
     /// O((r / resolution)²) for snap radius r.
     fn snap(&self, p: &Point2<f64>) -> Option<Cell> {
+        self.snap_within(p, self.cfg.graph.snap_radius)
+    }
+
+    /// [`snap`](Self::snap) within `radius` (m, at most 10).
+    fn snap_within(&self, p: &Point2<f64>, radius: f64) -> Option<Cell> {
         let res = self.grid.resolution();
         let c = cell_of(p, res, "pose", 0).ok()?;
         if self.grid.is_traversable(c) {
             return Some(c);
         }
-        // Bounded by GraphConfig::validate (<= 10 m).
+        let radius = radius.clamp(0.0, 10.0);
+        // Bounded by the clamp (<= 10 m).
         #[allow(clippy::cast_possible_truncation)]
-        let r = (self.cfg.graph.snap_radius / res).ceil() as i32;
+        let r = (radius / res).ceil() as i32;
         let mut best: Option<(f64, Cell)> = None;
         for dy in -r..=r {
             for dx in -r..=r {
@@ -316,9 +322,7 @@ impl FrontierMap {
                     continue;
                 }
                 let d = (self.grid.cell_center(n) - p).norm();
-                if d <= self.cfg.graph.snap_radius + 1e-12
-                    && best.is_none_or(|(bd, bc)| (d, n) < (bd, bc))
-                {
+                if d <= radius + 1e-12 && best.is_none_or(|(bd, bc)| (d, n) < (bd, bc)) {
                     best = Some((d, n));
                 }
             }
@@ -424,7 +428,7 @@ impl FrontierMap {
         let targets = std::mem::take(&mut self.portal_targets);
         self.graph.portals.retain(|id, _| targets.contains_key(id));
         for (&id, p) in &targets {
-            let cell = self.snap(p);
+            let cell = self.snap_within(p, self.cfg.levels.portal_radius);
             let node = AnchorNode {
                 position: *p,
                 cell,

@@ -902,7 +902,7 @@ impl Bridge {
                 self.state = NodeState::Confirmed;
                 self.hold(out);
             }
-            Ok(AgentCommand::Exhausted) => {
+            Ok(AgentCommand::Exhausted | AgentCommand::FloorExhausted { .. }) => {
                 if self.state != NodeState::Exhausted {
                     tracing::info!("search exhausted: holding and re-checking at every step");
                 }

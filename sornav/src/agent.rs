@@ -74,6 +74,16 @@ pub enum AgentCommand {
     /// place for a full turn before giving up; the robot bridge holds and
     /// keeps stepping).
     Exhausted,
+    /// Exhausted on this floor, and stairs seen from it lead to a floor
+    /// the robot has not explored, but the robot does not climb
+    /// (`frontier.levels.allow_stairs = false`): "not found on this floor;
+    /// stairs at these points lead to an unexplored floor". Like
+    /// [`Exhausted`](Self::Exhausted), per step, not terminal.
+    FloorExhausted {
+        /// Where each such stair starts on the robot's floor (its end on
+        /// this floor), nearest first.
+        stairs: Vec<Point3<f64>>,
+    },
 }
 
 /// The executor's clock: the reading passed to [`Agent::step`].
@@ -991,7 +1001,12 @@ impl Agent {
                             None,
                             format!("no reachable frontier ({reason})"),
                         );
-                        AgentCommand::Exhausted
+                        let stairs = self.stairs_to_unexplored_floors(&pose.position);
+                        if stairs.is_empty() {
+                            AgentCommand::Exhausted
+                        } else {
+                            AgentCommand::FloorExhausted { stairs }
+                        }
                     }
                     None => self.keep_going(
                         now,
@@ -1093,6 +1108,30 @@ impl Agent {
         to: &Point3<f64>,
     ) -> Result<Option<Vec<Point3<f64>>>, AgentError> {
         Ok(self.frontiers.path(from, to)?.map(|edge| edge.path))
+    }
+
+    /// Where stairs leave the robot's floor toward a floor the robot does
+    /// not use (it cannot climb: the stairs are seen but not planned over),
+    /// nearest first. Empty when the robot climbs (stairs are then part of
+    /// G_F) or no stair was seen.
+    fn stairs_to_unexplored_floors(&self, feet: &Point3<f64>) -> Vec<Point3<f64>> {
+        if self.config.frontier.levels.allow_stairs {
+            return Vec::new();
+        }
+        let tol = self.config.frontier.levels.robot_level_tolerance;
+        let mut ends: Vec<Point3<f64>> = self
+            .frontiers
+            .stairs()
+            .iter()
+            .filter_map(|s| {
+                [&s.lower, &s.upper]
+                    .into_iter()
+                    .find(|e| e.level.is_some() && (e.position.z - feet.z).abs() <= tol)
+                    .map(|e| e.position)
+            })
+            .collect();
+        ends.sort_by(|a, b| (a - feet).norm().total_cmp(&(b - feet).norm()));
+        ends
     }
 
     /// Whether an object with bounds `[lo, hi]` stands on a floor the agent

@@ -1,0 +1,112 @@
+//! The full agent across floors: in two-floor procedural houses it finds
+//! targets on the other floor (up and down the stairs), from its own
+//! rendered frames only.
+
+use sornav_examples::adapter::{AdapterConfig, ConfigFactory, SornavPolicy, sim_agent_config};
+use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
+use sornav_platform_sim::procedural::ProceduralConfig;
+use sornav_platform_sim::{CameraConfig, RunConfig, Scene, SimConfig, Simulator, run_episode};
+
+fn house(seed: u64, floors: u32) -> Simulator {
+    let scene = Scene::procedural(
+        seed,
+        &ProceduralConfig {
+            floors: Some(floors),
+            ..ProceduralConfig::default()
+        },
+    )
+    .unwrap();
+    Simulator::new(
+        scene,
+        SimConfig {
+            camera: CameraConfig {
+                width: 160,
+                height: 120,
+                ..CameraConfig::default()
+            },
+            ..SimConfig::default()
+        },
+    )
+    .unwrap()
+}
+
+/// Runs the cross-floor episodes of `houses`; returns (successes, runs)
+/// and prints what the agent knew at the end of each failure.
+fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usize) {
+    let factory = ConfigFactory {
+        config: sim_agent_config(),
+        policy: None,
+    };
+    let mut policy = SornavPolicy::new(&factory, AdapterConfig::default());
+    let (mut ok, mut runs) = (0, 0);
+    for &seed in houses {
+        let sim = house(seed, floors);
+        let episodes = generate_episodes(
+            &sim,
+            &GeneratorConfig {
+                episodes_per_category: per_category,
+                seed,
+                ..GeneratorConfig::default()
+            },
+        )
+        .unwrap();
+        for e in &episodes {
+            let r = run_episode(&sim, e, &mut policy, &RunConfig::default()).unwrap();
+            if !r.cross_floor {
+                continue;
+            }
+            runs += 1;
+            let trace = policy.take_trace();
+            if r.success {
+                ok += 1;
+                continue;
+            }
+            let agent = policy.agent().expect("agent");
+            let map = agent.frontier_map();
+            eprintln!(
+                "house {seed} episode {} ({} from level {} to {}): {:?} after {} actions, end {}",
+                e.episode_id,
+                e.object_category,
+                r.start_level,
+                r.goal_level,
+                r.outcome,
+                r.actions,
+                trace.agent_end
+            );
+            eprintln!("  levels {:?}", map.levels().collect::<Vec<_>>());
+            for s in map.stairs() {
+                eprintln!("  stair {:?} -> {:?} ({:.1} m)", s.lower, s.upper, s.length);
+            }
+            let g = map.graph();
+            eprintln!(
+                "  frontiers {} (reachable {}), robot {:?}",
+                g.len(),
+                g.nodes()
+                    .filter(|n| g
+                        .cost(
+                            sornav::frontier_graph::NodeId::Robot,
+                            sornav::frontier_graph::NodeId::Frontier(n.id)
+                        )
+                        .is_some())
+                    .count(),
+                g.robot()
+            );
+            let runs = trace.decisions.runs();
+            for d in &runs[runs.len().saturating_sub(6)..] {
+                eprintln!("  {d:?}");
+            }
+        }
+    }
+    (ok, runs)
+}
+
+#[test]
+fn finds_targets_on_the_other_floor() {
+    let (ok, runs) = cross_floor(&[1, 5, 7], 2, 1);
+    eprintln!("cross-floor: {ok} / {runs}");
+    assert!(runs >= 3, "the houses give cross-floor episodes");
+    assert!(
+        ok * 2 >= runs,
+        "{ok} of {runs} cross-floor episodes succeeded"
+    );
+}
