@@ -280,6 +280,10 @@ pub struct SornavPolicy<F> {
     last_act_end: Option<Instant>,
     exhausted_turns: usize,
     turns: i32,
+    /// Camera pitch of the current frame (rad, positive up) and the tilt
+    /// of one LOOK_UP / LOOK_DOWN (rad).
+    pitch: f64,
+    tilt: f64,
     trace: EpisodeTrace,
     /// `SORNAV_DEBUG` is set: log every dispatch to stderr.
     debug: bool,
@@ -325,6 +329,8 @@ impl<F: AgentFactory> SornavPolicy<F> {
             last_act_end: None,
             exhausted_turns: 0,
             turns: 12,
+            pitch: 0.0,
+            tilt: 30f64.to_radians(),
             trace: EpisodeTrace::default(),
             debug: std::env::var_os("SORNAV_DEBUG").is_some(),
         }
@@ -451,6 +457,9 @@ impl<F: AgentFactory> SornavPolicy<F> {
         let Some(agent) = self.agent.as_ref() else {
             return Action::Stop;
         };
+        if let Some(tilt) = self.stair_tilt(agent, feet) {
+            return tilt;
+        }
         let resolution = agent.config().frontier.grid.resolution;
         let cell = |x: f64, y: f64| ((x / resolution).floor(), (y / resolution).floor());
         // The forward segment must stay on the agent's traversable map: its
@@ -460,6 +469,32 @@ impl<F: AgentFactory> SornavPolicy<F> {
         let traversable = |q: &Point3<f64>| cell(q.x, q.y) == start_cell || agent.is_traversable(q);
         self.follower.config_mut().sample_spacing_m = resolution / 2.0;
         self.follower.next_action(feet, yaw, &traversable)
+    }
+
+    /// LOOK_DOWN before going down a stair, LOOK_UP once off it: a stair
+    /// descends more steeply (about 34 degrees) than half the camera's
+    /// vertical field of view (31 degrees at 640x480, HFOV 79), so with a
+    /// level camera the treads below are never seen and the stair's open
+    /// end cannot advance. Down when the goal is more than 0.3 m below the
+    /// feet and the robot is on a stair or within 2 m of a stair's upper
+    /// end; level otherwise. `None`: the camera is where it should be.
+    fn stair_tilt(&self, agent: &Agent, feet: &Point3<f64>) -> Option<Action> {
+        let map = agent.frontier_map();
+        let below = self.follower.waypoint().is_some_and(|w| w.z < feet.z - 0.3);
+        let near_top = map.level_at(feet.z).is_none()
+            || map.stairs().iter().any(|s| {
+                (s.upper.position.z - feet.z).abs() < 0.3
+                    && (s.upper.position.xy() - feet.xy()).norm() < 2.0
+            });
+        let want = if below && near_top { -self.tilt } else { 0.0 };
+        let half = self.tilt / 2.0;
+        if self.pitch > want + half {
+            Some(Action::LookDown)
+        } else if self.pitch < want - half {
+            Some(Action::LookUp)
+        } else {
+            None
+        }
     }
 
     /// Bookkeeping of the previous action's effect (collisions).
@@ -498,6 +533,8 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         let motion = &sim.config().agent;
         self.follower.set_motion(motion);
         self.turns = (360.0 / motion.turn_deg).round().max(2.0) as i32;
+        self.tilt = motion.tilt_deg.to_radians();
+        self.pitch = 0.0;
         self.target = episode.object_category.clone();
         self.agent = match self.factory.build(labels.entries()) {
             Ok(mut agent) => match agent.set_target(&episode.object_category) {
@@ -522,6 +559,7 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         }
         self.trace.trajectory.push(f32x3(&obs.position));
         let feet = self.to_local(&obs.position);
+        self.pitch = obs.pitch;
         self.after_last_action(&feet, step);
         let action = self.decide(obs, &feet, step);
         self.follower.record(&feet, obs.yaw, action);

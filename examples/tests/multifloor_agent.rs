@@ -74,8 +74,63 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
                 trace.agent_end
             );
             eprintln!("  levels {:?}", map.levels().collect::<Vec<_>>());
+            let zs: Vec<f32> = trace.trajectory.iter().map(|p| p[2]).collect();
+            eprintln!(
+                "  trajectory z {:?}..{:?}",
+                zs.iter().copied().fold(f32::INFINITY, f32::min),
+                zs.iter().copied().fold(f32::NEG_INFINITY, f32::max)
+            );
+            if std::env::var_os("SORNAV_MF_DUMP").is_some()
+                && let Some(s) = map.stairs().first()
+            {
+                let c = s.upper.position;
+                for dy in (-25..=25).rev() {
+                    let row: String = (-25..=25)
+                        .map(|dx| {
+                            let v = map
+                                .surfaces_at(c.x + 0.1 * f64::from(dx), c.y + 0.1 * f64::from(dy));
+                            match v.first() {
+                                None => "   .".to_string(),
+                                Some(z) => format!("{:4}", (z * 10.0).round() as i32),
+                            }
+                        })
+                        .collect();
+                    eprintln!("  {row}");
+                }
+            }
             for s in map.stairs() {
                 eprintln!("  stair {:?} -> {:?} ({:.1} m)", s.lower, s.upper, s.length);
+            }
+            for l in map.levels() {
+                let lg = map.level_map(l.id).unwrap().graph();
+                for id in lg.node_ids() {
+                    if let sornav::frontier_graph::NodeId::Portal(_) = id {
+                        eprintln!(
+                            "  level {:?} portal {:?} at {:?}: robot edge {:?}, traversable cells nearby {}",
+                            l.id,
+                            id,
+                            lg.position(id),
+                            lg.cost(sornav::frontier_graph::NodeId::Robot, id),
+                            {
+                                let p = lg.position(id).unwrap();
+                                let grid = map.level_map(l.id).unwrap().grid();
+                                let mut n = 0;
+                                for dx in -16..=16 {
+                                    for dy in -16..=16 {
+                                        let q = nalgebra::Point2::new(
+                                            p.x + 0.05 * f64::from(dx),
+                                            p.y + 0.05 * f64::from(dy),
+                                        );
+                                        if grid.cell_of(&q).is_ok_and(|c| grid.is_traversable(c)) {
+                                            n += 1;
+                                        }
+                                    }
+                                }
+                                n
+                            }
+                        );
+                    }
+                }
             }
             let g = map.graph();
             eprintln!(
@@ -102,7 +157,12 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
 
 #[test]
 fn finds_targets_on_the_other_floor() {
-    let (ok, runs) = cross_floor(&[1, 5, 7], 2, 1);
+    // SORNAV_MF_HOUSES=1,5 runs only those houses (debugging).
+    let houses: Vec<u64> = std::env::var("SORNAV_MF_HOUSES")
+        .ok()
+        .map(|v| v.split(',').filter_map(|s| s.trim().parse().ok()).collect())
+        .unwrap_or_else(|| vec![1, 5, 7]);
+    let (ok, runs) = cross_floor(&houses, 2, 1);
     eprintln!("cross-floor: {ok} / {runs}");
     assert!(runs >= 3, "the houses give cross-floor episodes");
     assert!(
