@@ -202,3 +202,121 @@ proptest! {
         }
     }
 }
+
+/// Everything of a graph that a caller sees: nodes (id, cells, level) and
+/// edges (endpoints, cost both ways, path).
+type GraphKey = (
+    Vec<(u64, Vec<Cell>, u16)>,
+    Vec<(NodeId, NodeId, u64, u64, usize)>,
+);
+
+fn graph_key(g: &sornav_frontier_graph::FrontierGraph) -> GraphKey {
+    let nodes = g
+        .nodes()
+        .map(|n| (n.id.0, n.cells.clone(), n.level.0))
+        .collect();
+    let mut edges: Vec<_> = g
+        .edges()
+        .map(|e| {
+            (
+                e.from,
+                e.to,
+                e.cost.to_bits(),
+                e.cost_from(e.to).unwrap().to_bits(),
+                e.path.len(),
+            )
+        })
+        .collect();
+    edges.sort();
+    (nodes, edges)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 48, ..ProptestConfig::default() })]
+
+    /// Single-floor inputs give exactly the single-floor map's graph, with
+    /// stairs allowed or not.
+    #[test]
+    fn single_floor_equals_frontier_map((world, origins) in world_strategy(), allow in any::<bool>()) {
+        prop_assume!(!origins.is_empty());
+        let mut cfg = world_config();
+        cfg.levels.allow_stairs = allow;
+        let mut single = FrontierMap::new(cfg.clone()).unwrap();
+        let mut multi = MultiLevelMap::new(cfg).unwrap();
+        let range = single.config().grid.max_range;
+        for o in &origins {
+            let pts = World::scan(&world, *o, 180, range);
+            let eye = Point3::new(o.x, o.y, 0.5);
+            let a = single.update(&eye, &pts).unwrap();
+            let b = multi.update(&Point3::new(o.x, o.y, 0.0), &eye, &pts).unwrap();
+            prop_assert_eq!(a, b);
+            let ga = graph_key(single.frontier_graph(o).unwrap());
+            let gb = graph_key(multi.frontier_graph(&Point3::new(o.x, o.y, 0.0)).unwrap());
+            prop_assert_eq!(ga, gb);
+        }
+        prop_assert_eq!(multi.levels().count(), 1);
+        prop_assert!(multi.stairs().is_empty());
+        prop_assert_eq!(single.graph(), multi.graph());
+    }
+}
+
+/// NaN / infinite feet, origin or points are typed errors and modify
+/// nothing.
+#[test]
+fn bad_inputs_are_typed_errors_and_change_nothing() {
+    let scene = Scene::new(SceneParams {
+        rise: 0.17,
+        tread: 0.28,
+        width: 1.0,
+        turn: 1,
+        offset: (2.0, -3.0),
+        landing: true,
+        walls: (true, false),
+        platform: Some(0.6),
+        table: true,
+        across: 0.4,
+    });
+    let mut map = explore(&scene);
+    // (Debug, not JSON: the map has tuple-keyed maps, which JSON cannot key.)
+    let before = format!("{map:?}");
+    let f = scene.feet[0];
+    let eye = f + Vector3::new(0.0, 0.0, EYE);
+    let good = scene.scan(&eye, 0.2, 3.0, 5.0);
+    for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+        for axis in 0..3 {
+            let mut p = f;
+            p[axis] = bad;
+            let e = map.update(&p, &eye, &good).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    FrontierError::NonFinite { .. } | FrontierError::OutOfRange { .. }
+                ),
+                "{e:?}"
+            );
+            let mut o = eye;
+            o[axis] = bad;
+            let e = map.update(&f, &o, &good).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    FrontierError::NonFinite { .. } | FrontierError::OutOfRange { .. }
+                ),
+                "{e:?}"
+            );
+            let mut pts = good.clone();
+            pts[7][axis] = bad;
+            let e = map.update(&f, &eye, &pts).unwrap_err();
+            assert!(
+                matches!(
+                    e,
+                    FrontierError::NonFinite { index: 7, .. } | FrontierError::OutOfRange { .. }
+                ),
+                "{e:?}"
+            );
+            assert!(map.frontier_graph(&p).is_err());
+            assert!(map.path(&p, &f).is_err());
+        }
+    }
+    assert_eq!(format!("{map:?}"), before);
+}
