@@ -6,9 +6,7 @@ mod common;
 use common::{config, explore, reference_dijkstra, world_strategy};
 use nalgebra::Point2;
 use proptest::prelude::*;
-use sornav_frontier_graph::{
-    Cell, CellState, FrontierMap, FrontierMapConfig, NodeId, is_frontier_cell, path_cells,
-};
+use sornav_frontier_graph::{Cell, CellState, FrontierMap, NodeId, is_frontier_cell, path_cells};
 use std::collections::{BTreeMap, BTreeSet};
 
 fn all_cells(map: &FrontierMap) -> Vec<Cell> {

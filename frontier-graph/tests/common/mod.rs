@@ -115,12 +115,15 @@ pub fn explore(map: &mut FrontierMap, world: &World, origins: &[Point2<f64>], be
 
 pub mod scene;
 
+/// A directed link between two levels' cells: (from, to, weight).
+pub type Link = ((usize, Cell), (usize, Cell), f64);
+
 /// Textbook Dijkstra over the union of several levels' grids (8-connected
 /// octile, no corner cutting, as [`reference_dijkstra`]) joined by directed
 /// links `((level, cell), (level, cell), weight)`; distances in metres.
 pub fn reference_union_dijkstra(
     grids: &[&OccupancyGrid],
-    links: &[((usize, Cell), (usize, Cell), f64)],
+    links: &[Link],
     src: (usize, Cell),
 ) -> HashMap<(usize, Cell), f64> {
     #[derive(PartialEq)]
