@@ -106,6 +106,9 @@ impl Way {
     }
 }
 
+/// A node's level (`None` off every level) and its ways to the hubs.
+type Access = (Option<LevelId>, Vec<(usize, Way)>);
+
 /// A hub of the inter-level graph: a portal (stair end on a level) or the
 /// open end of a partly seen stair.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -754,7 +757,7 @@ impl MultiLevelMap {
             z: robot.z,
         });
         g.home = self.maps[0].graph().home.clone();
-        let mut access: BTreeMap<NodeId, (Option<LevelId>, Vec<(usize, Way)>)> = BTreeMap::new();
+        let mut access: BTreeMap<NodeId, Access> = BTreeMap::new();
         access.insert(
             NodeId::Robot,
             match location {

@@ -172,14 +172,14 @@ impl FrontierMap {
         self.portal_targets = portals;
     }
 
-    /// Sets level and height of new frontier nodes.
-    fn stamp_nodes(&mut self, ids: &[FrontierId]) {
+    /// Sets level and height of the frontier nodes. Every node, not only
+    /// the added ones: a segment dissolved and re-created identical keeps
+    /// its id (it is not "added") but is rebuilt with level 0. O(F).
+    fn stamp_nodes(&mut self) {
         let (level, z) = (self.level, self.cfg.grid.floor_z);
-        for id in ids {
-            if let Some(n) = self.graph.frontiers.get_mut(id) {
-                n.level = level;
-                n.z = z;
-            }
+        for n in self.graph.frontiers.values_mut() {
+            n.level = level;
+            n.z = z;
         }
     }
 
@@ -254,7 +254,7 @@ impl FrontierMap {
             cfg: &self.cfg.frontier,
         }
         .update(&delta);
-        self.stamp_nodes(&changes.added);
+        self.stamp_nodes();
         for id in &changes.removed {
             self.pending.added.remove(id);
         }
@@ -285,7 +285,7 @@ impl FrontierMap {
             cfg: &self.cfg.frontier,
         }
         .rebuild();
-        self.stamp_nodes(&changes.added);
+        self.stamp_nodes();
         self.graph.edges.clear();
         self.pending = Pending {
             full: true,

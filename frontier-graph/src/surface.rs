@@ -142,7 +142,7 @@ impl SurfaceMap {
         let lim = f64::from(crate::MAX_CELL_COORD);
         // In range by the check.
         #[allow(clippy::cast_possible_truncation)]
-        (fx.abs() < lim && fy.abs() < lim).then(|| (fx as i32, fy as i32))
+        (fx.abs() < lim && fy.abs() < lim).then_some((fx as i32, fy as i32))
     }
 
     /// World x/y of a column centre.

@@ -3,54 +3,11 @@
 
 mod common;
 
-use common::{World, explore, reference_dijkstra};
+use common::{config, explore, reference_dijkstra, world_strategy};
 use nalgebra::Point2;
 use proptest::prelude::*;
-use sornav_frontier_graph::{
-    Cell, CellState, FrontierMap, FrontierMapConfig, NodeId, is_frontier_cell, path_cells,
-};
+use sornav_frontier_graph::{Cell, CellState, FrontierMap, NodeId, is_frontier_cell, path_cells};
 use std::collections::{BTreeMap, BTreeSet};
-
-fn config() -> FrontierMapConfig {
-    let mut cfg = FrontierMapConfig::default();
-    cfg.grid.resolution = 0.1;
-    cfg.grid.max_range = 2.5;
-    cfg.grid.robot_radius = 0.15;
-    cfg.frontier.max_extent = 1.0;
-    cfg.frontier.min_cells = 3;
-    cfg
-}
-
-/// A 6 m x 6 m room with outer walls and random boxes, plus origins that lie
-/// in free space.
-fn world_strategy() -> impl Strategy<Value = (World, Vec<Point2<f64>>)> {
-    let boxes = prop::collection::vec((0.3f64..5.0, 0.3f64..5.0, 0.2f64..1.5, 0.1f64..1.0), 0..6);
-    let origins = prop::collection::vec((0.4f64..5.6, 0.4f64..5.6), 2..5);
-    (boxes, origins).prop_map(|(bs, os)| {
-        let mut boxes = vec![
-            [-0.1, -0.1, 6.1, 0.0],
-            [-0.1, 6.0, 6.1, 6.1],
-            [-0.1, -0.1, 0.0, 6.1],
-            [6.0, -0.1, 6.1, 6.1],
-        ];
-        for (x, y, w, h) in bs {
-            boxes.push([x, y, x + w, y + h]);
-        }
-        let world = World { boxes };
-        let origins = os
-            .into_iter()
-            .map(|(x, y)| Point2::new(x, y))
-            .filter(|p| {
-                // keep origins with clearance
-                (0..16).all(|k| {
-                    let a = f64::from(k) * std::f64::consts::TAU / 16.0;
-                    !world.blocked(p + nalgebra::Vector2::new(a.cos(), a.sin()) * 0.25)
-                }) && !world.blocked(*p)
-            })
-            .collect();
-        (world, origins)
-    })
-}
 
 fn all_cells(map: &FrontierMap) -> Vec<Cell> {
     let Some((lo, hi)) = map.grid().bounds() else {
