@@ -231,8 +231,13 @@ pub struct MultiLevelMap {
     maps: Vec<FrontierMap>,
     surfaces: SurfaceMap,
     stairs: Vec<Stair>,
+    /// Portal ids by (level, cell); rebuilt lazily (a restored map gives
+    /// its portals new ids, which only costs one refresh of their rows).
+    #[serde(skip)]
     portal_ids: BTreeMap<(LevelId, Cell), u32>,
     next_portal: u32,
+    /// Recomputed by every [`MultiLevelMap::frontier_graph`].
+    #[serde(skip)]
     hubs: Hubs,
     graph: FrontierGraph,
     /// `graph` is the composed multi-level graph (otherwise level 0's is
