@@ -191,11 +191,12 @@ pub struct RunOutcome {
 }
 
 /// The agent variants by name (`oracle` is the simulator's own).
-pub const VARIANTS: [&str; 5] = [
+pub const VARIANTS: [&str; 6] = [
     "sornav",
     "no-gate",
     "nearest-frontier",
     "semantic-ranking",
+    "single-floor",
     "oracle",
 ];
 

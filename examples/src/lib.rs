@@ -31,3 +31,4 @@ pub mod ros;
 pub mod scenes;
 pub mod summary;
 pub mod topdown;
+pub mod walk;

@@ -500,7 +500,10 @@ impl MultiLevelMap {
                 if far && self.flat_at(feet) {
                     Some(self.add_level(feet.z)?)
                 } else {
-                    None
+                    // A floor seen from the stair (a flat area over it) may
+                    // be a new level under the robot's feet.
+                    self.refresh_stairs()?;
+                    self.level_at(feet.z)
                 }
             }
         };
@@ -513,6 +516,21 @@ impl MultiLevelMap {
                 .integrate(origin, points, self.cfg.grid.max_range);
         }
         Ok(stats)
+    }
+
+    /// Recomputes every level's frontier segmentation from scratch, marks
+    /// every edge for recomputation and forces a stair extraction at the
+    /// next [`frontier_graph`](Self::frontier_graph) (the non-incremental
+    /// reference, and for benchmarks).
+    ///
+    /// # Complexity
+    /// That of [`FrontierMap::rebuild`] on every level; the next refresh
+    /// then costs one search per node and level plus the extraction.
+    pub fn rebuild(&mut self) {
+        for m in &mut self.maps {
+            m.rebuild();
+        }
+        self.surfaces.mark_dirty();
     }
 
     /// Re-extracts the stairs when the surfaces changed; creates the levels

@@ -178,6 +178,11 @@ impl SurfaceMap {
         }
     }
 
+    /// Forces the next [`take_dirty`](Self::take_dirty) to report a change.
+    pub(crate) fn mark_dirty(&mut self) {
+        self.dirty = true;
+    }
+
     /// Whether anything changed since the last call.
     pub(crate) fn take_dirty(&mut self) -> bool {
         std::mem::take(&mut self.dirty)

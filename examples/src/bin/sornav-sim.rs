@@ -92,7 +92,7 @@ struct RunArgs {
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     categories: Vec<String>,
     /// Variants (comma-separated): sornav, no-gate, nearest-frontier,
-    /// semantic-ranking, oracle. Default: sornav.
+    /// semantic-ranking, single-floor, oracle. Default: sornav.
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     variants: Vec<String>,
     /// Seed of scenes, episodes and sensor noise.
