@@ -8,9 +8,12 @@
 //! traversability, not Euclidean proximity.
 //!
 //! # Should I use this crate?
-//! Use it when a ground robot explores one floor from range data (depth
+//! Use it when a ground robot explores a building from range data (depth
 //! camera or LiDAR) and you need frontiers *and* the true travel cost between
-//! them. It does not depend on any other sornav crate.
+//! them: [`FrontierMap`] for one floor, [`MultiLevelMap`] for several floors
+//! joined by stairs (found online from the robot's own returns; see the
+//! [`levels`] module for the model, its complexity and its limits). It does
+//! not depend on any other sornav crate.
 //!
 //! # API themes
 //! * [`FrontierMap::update`]: integrate a scan (sensor origin + world
@@ -22,6 +25,11 @@
 //!   [`FrontierGraph::robot`], [`FrontierGraph::home`],
 //!   [`FrontierGraph::to_petgraph`].
 //! * [`FrontierMap::path`]: an executable shortest path between two points.
+//! * [`MultiLevelMap`]: the same per floor, plus [`Level`]s and [`Stair`]s;
+//!   [`MultiLevelMap::frontier_graph`] returns G_F across floors (nodes carry
+//!   their [`LevelId`] and height, edges 3-D paths and directed costs with
+//!   the stair costs), [`MultiLevelMap::path`] plans over stairs, and
+//!   `allow_stairs = false` ([`LevelConfig`]) keeps one floor.
 //!
 //! All inputs are validated: NaN/infinite or out-of-range coordinates give a
 //! [`FrontierError`], never a panic.
