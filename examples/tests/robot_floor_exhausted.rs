@@ -76,7 +76,7 @@ fn run(seed: u64, request: &str) -> (Status, World) {
         None,
     )
     .unwrap();
-    world.speed = 1.0;
+    world.speed = 1.5;
     let mut config = ScoutConfig::from_toml(ScoutConfig::EXAMPLE).unwrap();
     assert!(
         !config.robot.can_climb_stairs,
