@@ -21,7 +21,14 @@
 //!   computes arrival from the odometry pose (the CMU stack has no "reached"
 //!   signal). Every dispatched mission's waypoint is published on
 //!   `/way_point` and re-published every `waypoint_republish_s`; `Verify`,
-//!   `Stop` and `Exhausted` hold the robot (a waypoint at its own position).
+//!   `Stop`, `Exhausted` and `FloorExhausted` hold the robot (a waypoint at
+//!   its own position).
+//! * **Floors**: a robot that cannot climb (`robot.can_climb_stairs =
+//!   false`) never plans over stairs; when its floor is exhausted while
+//!   stairs it has seen lead to another floor, the state is
+//!   [`NodeState::FloorExhausted`] with the stairs in the status and one log
+//!   line per change: "not found on this floor; stairs at (x, y, z) lead to
+//!   an unexplored floor". Re-checked at every step like `exhausted`.
 //! * **Targets** (`/sornav/target`) switch the agent's target and keep its
 //!   maps, so targets can follow one another; a confirmed target is kept in
 //!   the status.
@@ -128,6 +135,13 @@ pub enum NodeState {
     /// search resumes by itself when a frontier or a candidate appears), or
     /// the next request.
     Exhausted,
+    /// Like [`Exhausted`](Self::Exhausted), on the robot's floor, while
+    /// stairs seen from it lead to a floor the robot (which cannot climb,
+    /// `robot.can_climb_stairs = false`) has not explored: "not found on
+    /// this floor; stairs at (x, y, z) lead to an unexplored floor"
+    /// ([`Status::stairs`], [`Status::note`]). Holding and re-checked at
+    /// every step like `exhausted`.
+    FloorExhausted,
     /// Shut down.
     Stopped,
 }
@@ -238,6 +252,31 @@ pub struct Status {
     pub bridge: BridgeStats,
     /// The last input error.
     pub last_error: Option<String>,
+    /// In `floor_exhausted`: where each stair leading to an unexplored
+    /// floor starts on the robot's floor (map frame, m), nearest first;
+    /// empty otherwise.
+    #[serde(default)]
+    pub stairs: Vec<[f64; 3]>,
+    /// A sentence for operators about the outcome (in `floor_exhausted`:
+    /// "not found on this floor; stairs at (x, y, z) lead to an unexplored
+    /// floor"), `None` otherwise.
+    #[serde(default)]
+    pub note: Option<String>,
+}
+
+/// The operator's sentence for a floor exhausted with `stairs` leading to
+/// unexplored floors: "not found on this floor; stairs at (x, y, z) lead to
+/// an unexplored floor" (map frame, metres, 2 decimals; every stair, joined
+/// by `and`).
+pub fn floor_exhausted_note(stairs: &[[f64; 3]]) -> String {
+    let at: Vec<String> = stairs
+        .iter()
+        .map(|p| format!("({:.2}, {:.2}, {:.2})", p[0], p[1], p[2]))
+        .collect();
+    format!(
+        "not found on this floor; stairs at {} lead to an unexplored floor",
+        at.join(" and ")
+    )
 }
 
 /// The robot pose from one odometry message.
@@ -267,6 +306,11 @@ pub struct Bridge {
     last_cmd_vel: Option<Duration>,
     holding: bool,
     confirmed: Vec<ConfirmedTarget>,
+    /// In `floor_exhausted`: the stairs leading to unexplored floors.
+    stairs: Vec<[f64; 3]>,
+    /// In `floor_exhausted`: the operator's sentence (also the last one
+    /// logged, so that it is logged once per change).
+    note: Option<String>,
     stats: BridgeStats,
     last_error: Option<String>,
 }
@@ -312,6 +356,8 @@ impl Bridge {
             last_cmd_vel: None,
             holding: false,
             confirmed: Vec::new(),
+            stairs: Vec::new(),
+            note: None,
             stats: BridgeStats::default(),
             last_error: None,
         })
@@ -643,7 +689,10 @@ impl Bridge {
             NodeState::WaitingForOdometry => self.paused,
             s => Some(s),
         };
-        let searching = matches!(state, Some(NodeState::Searching | NodeState::Exhausted));
+        let searching = matches!(
+            state,
+            Some(NodeState::Searching | NodeState::Exhausted | NodeState::FloorExhausted)
+        );
         let Some(agent) = self.agent.as_ref().filter(|_| searching) else {
             return false;
         };
@@ -668,6 +717,8 @@ impl Bridge {
                 };
                 self.paused = None;
                 self.holding = false;
+                self.stairs.clear();
+                self.note = None;
                 // Step at the next tick.
                 self.last_step = None;
                 Ok(())
@@ -820,10 +871,14 @@ impl Bridge {
         }
         if due(self.last_step, now, 1.0 / self.config.rates.control_hz) {
             self.last_step = Some(now);
-            // An exhausted search is re-checked at every step: the maps keep
-            // growing while the robot holds (a door opens, the terrain map
-            // fills in, a candidate gathers its N_obs observations).
-            if matches!(self.state, NodeState::Searching | NodeState::Exhausted) {
+            // An exhausted search (on this floor or everywhere) is
+            // re-checked at every step: the maps keep growing while the
+            // robot holds (a door opens, the terrain map fills in, a
+            // candidate gathers its N_obs observations).
+            if matches!(
+                self.state,
+                NodeState::Searching | NodeState::Exhausted | NodeState::FloorExhausted
+            ) {
                 self.step_agent(now, &mut out);
             }
             out.push(self.status_message(now));
@@ -875,6 +930,13 @@ impl Bridge {
         for d in agent.take_decisions() {
             tracing::debug!(step = ?d.step, action = %d.action, reason = %d.reason, "decision");
         }
+        if result
+            .as_ref()
+            .is_ok_and(|c| !matches!(c, AgentCommand::FloorExhausted { .. }))
+        {
+            self.stairs.clear();
+            self.note = None;
+        }
         match result {
             Ok(AgentCommand::Dispatch { mission, .. }) => {
                 self.state = NodeState::Searching;
@@ -902,11 +964,28 @@ impl Bridge {
                 self.state = NodeState::Confirmed;
                 self.hold(out);
             }
-            Ok(AgentCommand::Exhausted | AgentCommand::FloorExhausted { .. }) => {
+            Ok(AgentCommand::Exhausted) => {
                 if self.state != NodeState::Exhausted {
                     tracing::info!("search exhausted: holding and re-checking at every step");
                 }
                 self.state = NodeState::Exhausted;
+                self.hold(out);
+            }
+            Ok(AgentCommand::FloorExhausted { stairs }) => {
+                self.stairs = stairs.iter().map(|p| [p.x, p.y, p.z]).collect();
+                let note = floor_exhausted_note(&self.stairs);
+                // Once per change (state or stairs at the logged precision),
+                // not at every step.
+                if self.state != NodeState::FloorExhausted
+                    || self.note.as_deref() != Some(note.as_str())
+                {
+                    tracing::info!(
+                        stairs = self.stairs.len(),
+                        "{note}: holding and re-checking at every step"
+                    );
+                }
+                self.note = Some(note);
+                self.state = NodeState::FloorExhausted;
                 self.hold(out);
             }
             Err(AgentError::NoObservation) => {}
@@ -948,6 +1027,8 @@ impl Bridge {
             agent: agent.map(Agent::stats),
             bridge: self.stats,
             last_error: self.last_error.clone(),
+            stairs: self.stairs.clone(),
+            note: self.note.clone(),
         }
     }
 

@@ -147,6 +147,16 @@ pub struct RobotConfig {
     pub max_speed_mps: f64,
     /// Largest yaw rate (deg/s) the relay lets through.
     pub max_yaw_rate_dps: f64,
+    /// Whether the robot can climb stairs (default `false`: the Scout Mini
+    /// cannot). `false`: the agent never plans over stairs
+    /// (`frontier.levels.allow_stairs = false`) but still detects them
+    /// (`detect_stairs = true`), so that when its floor is exhausted while
+    /// seen stairs lead to another floor the node reports `floor_exhausted`
+    /// ("not found on this floor; stairs at ... lead to an unexplored
+    /// floor") instead of `exhausted`. `true`: the agent explores and
+    /// searches over stairs (only for a base and a local planner that
+    /// really climb them).
+    pub can_climb_stairs: bool,
 }
 
 impl Default for RobotConfig {
@@ -163,6 +173,7 @@ impl Default for RobotConfig {
             inflation_radius_m: None,
             max_speed_mps: 0.8,
             max_yaw_rate_dps: 90.0,
+            can_climb_stairs: false,
         }
     }
 }
@@ -608,8 +619,10 @@ impl ScoutConfig {
 
     /// The agent's configuration for a floor at world height `floor_z`: the
     /// `[agent]` section with the grid's floor, robot height and inflation
-    /// radius, the executor's arrival radii, and the unlabelled label,
-    /// taken from the robot's sections.
+    /// radius, stair climbing (`frontier.levels.allow_stairs =
+    /// robot.can_climb_stairs`, stairs always detected), the executor's
+    /// arrival radii, and the unlabelled label, taken from the robot's
+    /// sections.
     ///
     /// # Errors
     /// [`ConfigError::Agent`] when the result does not validate.
@@ -618,6 +631,10 @@ impl ScoutConfig {
         c.frontier.grid.floor_z = floor_z;
         c.frontier.grid.robot_height = self.robot.height_m;
         c.frontier.grid.robot_radius = self.robot.inflation_radius();
+        // A robot that cannot climb never plans over stairs, but still finds
+        // them: they are what it reports when its floor is exhausted.
+        c.frontier.levels.allow_stairs = self.robot.can_climb_stairs;
+        c.frontier.levels.detect_stairs = true;
         let a = &self.arrival;
         for (kind, radius) in [
             (&mut c.executor.explore, a.explore_radius_m),

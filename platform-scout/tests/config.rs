@@ -36,6 +36,25 @@ fn footprint_radii_and_agent_overrides() {
     assert!(unl.ignored && unl.name == "unlabelled");
 }
 
+#[test]
+fn can_climb_stairs_drives_the_agent_levels() {
+    // The Scout Mini cannot climb: never plans over stairs, still finds them.
+    let c = ScoutConfig::from_toml(ScoutConfig::EXAMPLE).unwrap();
+    assert!(!c.robot.can_climb_stairs);
+    assert!(!ScoutConfig::default().robot.can_climb_stairs);
+    let a = c.agent_config(0.0).unwrap();
+    assert!(!a.frontier.levels.allow_stairs);
+    assert!(a.frontier.levels.detect_stairs);
+    // Whatever the [agent] section says, the robot's capability decides.
+    let c = ScoutConfig::from_toml(
+        "[robot]\ncan_climb_stairs = true\n[agent.frontier.levels]\nallow_stairs = false\ndetect_stairs = false\n",
+    )
+    .unwrap();
+    let a = c.agent_config(0.0).unwrap();
+    assert!(a.frontier.levels.allow_stairs && a.frontier.levels.detect_stairs);
+    assert_eq!(invalid("[robot]\ncan_climb_stairs = 1\n"), "toml");
+}
+
 fn invalid(text: &str) -> String {
     match ScoutConfig::from_toml(text) {
         Err(ConfigError::Invalid { field, .. }) => field.to_owned(),
