@@ -174,7 +174,9 @@ impl Robot {
                 self.hold();
                 self.face(look_at);
             }
-            AgentCommand::Stop { .. } | AgentCommand::Exhausted => return false,
+            AgentCommand::Stop { .. }
+            | AgentCommand::Exhausted
+            | AgentCommand::FloorExhausted { .. } => return false,
         }
         true
     }
