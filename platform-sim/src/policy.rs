@@ -241,9 +241,8 @@ impl Policy for Oracle {
                     .unwrap_or(f64::INFINITY)
             })
         };
-        let best = crate::follow::choose_heading(turns, 1e-3, |k| {
-            after(k).filter(|&d| d < d0 - 1e-6)
-        });
+        let best =
+            crate::follow::choose_heading(turns, 1e-3, |k| after(k).filter(|&d| d < d0 - 1e-6));
         match best {
             Some(k) => crate::follow::heading_action(k),
             None => match self.search(agent, d0) {
