@@ -26,7 +26,8 @@
 //!    the border spans (fewer than four connections) removes every span closer
 //!    than the radius to a border, like Recast's `rcErodeWalkableArea`.
 //!    Passages narrower than three cells are then removed (a morphological
-//!    opening; the agent's discrete moves cannot follow them).
+//!    opening; the agent's discrete moves cannot follow them;
+//!    `remove_narrow_passages`).
 //! 6. **Islands** (connected components) smaller than `min_region_area` are
 //!    dropped.
 //! 7. **Floor**: a span is floor when its surface is the top of a floor or
@@ -68,6 +69,10 @@ pub struct NavMeshConfig {
     /// Largest vertical distance between a query point and a walking surface
     /// for the point to be on that surface (0.5, Habitat's `is_navigable`).
     pub vertical_tolerance: f64,
+    /// Remove passages narrower than three cells after the erosion (true):
+    /// the agent's discrete moves cannot follow them (see the module docs,
+    /// step 5). `false` keeps the raw eroded surface.
+    pub remove_narrow_passages: bool,
 }
 
 impl Default for NavMeshConfig {
@@ -80,6 +85,7 @@ impl Default for NavMeshConfig {
             max_slope_deg: 45.0,
             min_region_area: 1.0,
             vertical_tolerance: 0.5,
+            remove_narrow_passages: true,
         }
     }
 }
@@ -399,7 +405,9 @@ impl NavMesh {
         };
         nm.connect();
         nm.erode();
-        nm.open_narrow_passages();
+        if config.remove_narrow_passages {
+            nm.open_narrow_passages();
+        }
         nm.drop_small_islands();
         // scenes without any floor or staircase instance (unlabelled meshes):
         // every region counts as floor
