@@ -217,24 +217,32 @@ impl Policy for Oracle {
         let turns = (std::f64::consts::TAU / agent.config().turn_deg.to_radians())
             .round()
             .max(1.0) as usize;
-        // Distance after a forward move for k left turns (k = 0..turns).
-        let mut after = Vec::with_capacity(turns);
-        let mut probe = agent.clone();
-        for k in 0..turns {
-            if k > 0 {
-                probe.step(nav, Action::TurnLeft);
+        // Distance after a forward move for each signed turn count k of
+        // `choose_heading` (k > 0: k left turns, k < 0: |k| right turns).
+        // Each heading is probed by the very turns the agent will take to
+        // reach it: k left turns and 12 - k right turns end at headings
+        // that differ in the last bits, and a forward move that grazes a
+        // cell corner can be free for one and blocked for the other (the
+        // agent then turned back and forth between two headings forever).
+        let after = |k: i32| -> Option<f64> {
+            let turn = if k > 0 {
+                Action::TurnLeft
+            } else {
+                Action::TurnRight
+            };
+            let mut probe = agent.clone();
+            for _ in 0..k.unsigned_abs() {
+                probe.step(nav, turn);
             }
-            after.push(probe.try_forward(nav).map(|(p, _)| {
+            probe.try_forward(nav).map(|(p, _)| {
                 self.field
                     .as_ref()
                     .and_then(|f| f.distance(nav, &p).ok())
                     .unwrap_or(f64::INFINITY)
-            }));
-        }
-        let best = crate::follow::choose_heading(turns, 1e-3, |k| {
-            let i = usize::try_from(i64::from(k).rem_euclid(turns as i64)).unwrap_or(0);
-            after.get(i).copied().flatten().filter(|&d| d < d0 - 1e-6)
-        });
+            })
+        };
+        let best =
+            crate::follow::choose_heading(turns, 1e-3, |k| after(k).filter(|&d| d < d0 - 1e-6));
         match best {
             Some(k) => crate::follow::heading_action(k),
             None => match self.search(agent, d0) {
