@@ -46,6 +46,7 @@ use rustc_hash::FxHashMap;
 use serde::{Deserialize, Serialize};
 
 use crate::LevelId;
+use crate::search::DIRS as DIRS8;
 use crate::surface::{ColumnKey, SurfaceMap};
 
 /// One end of a [`Stair`].
@@ -134,17 +135,6 @@ enum Kind {
     On(usize),
     Off(usize),
 }
-
-const DIRS8: [(i32, i32); 8] = [
-    (1, 0),
-    (-1, 0),
-    (0, 1),
-    (0, -1),
-    (1, 1),
-    (1, -1),
-    (-1, 1),
-    (-1, -1),
-];
 
 /// Extracts stairs and new levels from `map` given the floor heights of the
 /// known levels (index = level id).

@@ -1070,22 +1070,26 @@ impl Agent {
                 )
             }
             None if self.unmapped_floor(&lo, &hi) => self.explore_toward_floor(now, target_id, &lo),
-            None => {
-                self.stats.unreachable_candidates += 1;
-                if let Some(state) = self.target.as_mut() {
-                    let _ = state.gate.on_approach_failed(ObjectId(target_id));
-                }
-                self.decide(
-                    now,
-                    DecisionStep::TargetAccepted,
-                    "reject_candidate",
-                    None,
-                    format!("candidate {target_id}: no reachable approach waypoint"),
-                );
-                Ok(AgentCommand::Continue {
-                    mission: self.executor.active().map(|(id, _)| id),
-                })
-            }
+            None => Ok(self.reject_candidate(now, target_id, "no reachable approach waypoint")),
+        }
+    }
+
+    /// Rejects an unreachable candidate (the gate drops it) and keeps the
+    /// active mission.
+    fn reject_candidate(&mut self, now: Duration, target_id: u64, why: &str) -> AgentCommand {
+        self.stats.unreachable_candidates += 1;
+        if let Some(state) = self.target.as_mut() {
+            let _ = state.gate.on_approach_failed(ObjectId(target_id));
+        }
+        self.decide(
+            now,
+            DecisionStep::TargetAccepted,
+            "reject_candidate",
+            None,
+            format!("candidate {target_id}: {why}"),
+        );
+        AgentCommand::Continue {
+            mission: self.executor.active().map(|(id, _)| id),
         }
     }
 
@@ -1186,22 +1190,11 @@ impl Agent {
                     format!("candidate {target_id} is on another floor: taking the stairs to it"),
                 )
             }
-            None => {
-                self.stats.unreachable_candidates += 1;
-                if let Some(state) = self.target.as_mut() {
-                    let _ = state.gate.on_approach_failed(ObjectId(target_id));
-                }
-                self.decide(
-                    now,
-                    DecisionStep::TargetAccepted,
-                    "reject_candidate",
-                    None,
-                    format!("candidate {target_id}: on another floor and no stair leads there"),
-                );
-                Ok(AgentCommand::Continue {
-                    mission: self.executor.active().map(|(id, _)| id),
-                })
-            }
+            None => Ok(self.reject_candidate(
+                now,
+                target_id,
+                "on another floor and no stair leads there",
+            )),
         }
     }
 
