@@ -957,7 +957,7 @@ fn place_model(b: &mut MeshBuilder, inst: u32, mesh: &ObjMesh, p: &XmlPiece, z0:
 }
 
 /// Highest riser (m) of a re-stepped Sweet Home 3D staircase
-/// ([`restep_staircase`]): under the agent's 0.2 m step.
+/// (`restep_staircase`): under the agent's 0.2 m step.
 pub const MAX_SH3D_RISER: f64 = 0.19;
 
 /// Treads narrower than this (m, triangle height over its longest edge) are
