@@ -103,13 +103,15 @@ fn dijkstra(
     nav: &NavMesh,
     sources: &[(SpanId, f64)],
     target: Option<SpanId>,
+    within: Option<&[bool]>,
 ) -> (Vec<f64>, Vec<u32>) {
+    let allowed = |s: usize| within.is_none_or(|w| w.get(s).copied().unwrap_or(false));
     let n = nav.span_count();
     let mut dist = vec![f64::INFINITY; n];
     let mut parent = vec![u32::MAX; n];
     let mut heap = BinaryHeap::new();
     for &(s, d0) in sources {
-        if d0 < dist[s as usize] {
+        if allowed(s as usize) && d0 < dist[s as usize] {
             dist[s as usize] = d0;
             heap.push(HeapItem(d0, s));
         }
@@ -123,7 +125,7 @@ fn dijkstra(
         }
         for (m, w) in nav.moves_3d(s as usize) {
             let nd = d + w;
-            if nd < dist[m] {
+            if nd < dist[m] && allowed(m) {
                 dist[m] = nd;
                 parent[m] = s;
                 heap.push(HeapItem(nd, m as u32));
@@ -143,10 +145,37 @@ impl NavMesh {
     /// # Complexity
     /// O(S log S) for S spans.
     pub fn geodesic_field(&self, goals: &[Point3<f64>]) -> Result<GeodesicField, NavError> {
+        self.field_within(goals, None)
+    }
+
+    /// [`NavMesh::geodesic_field`] over the spans flagged in `within` only
+    /// (other spans are at infinite distance; goals on them are ignored),
+    /// e.g. [`NavMesh::wide_spans`].
+    ///
+    /// # Errors
+    /// [`NavError::NoGoals`] when no goal lies on (or near) a flagged span.
+    ///
+    /// # Complexity
+    /// O(S log S) for S spans.
+    pub fn geodesic_field_within(
+        &self,
+        goals: &[Point3<f64>],
+        within: &[bool],
+    ) -> Result<GeodesicField, NavError> {
+        self.field_within(goals, Some(within))
+    }
+
+    fn field_within(
+        &self,
+        goals: &[Point3<f64>],
+        within: Option<&[bool]>,
+    ) -> Result<GeodesicField, NavError> {
         let mut snapped = Vec::new();
         let mut sources = Vec::new();
         for g in goals {
-            if let Ok(s) = locate(self, g) {
+            if let Ok(s) = locate(self, g)
+                && within.is_none_or(|w| w.get(s as usize).copied().unwrap_or(false))
+            {
                 snapped.push((s, *g));
                 sources.push((s, (g - self.span_center(s)).norm()));
             }
@@ -154,7 +183,7 @@ impl NavMesh {
         if sources.is_empty() {
             return Err(NavError::NoGoals);
         }
-        let (dist, _) = dijkstra(self, &sources, None);
+        let (dist, _) = dijkstra(self, &sources, None, within);
         Ok(GeodesicField {
             dist,
             goals: snapped,
@@ -176,7 +205,7 @@ impl NavMesh {
             Pair::Connected(sa, sb) => (sa, sb),
         };
         let (ca, cb) = (self.span_center(sa), self.span_center(sb));
-        let (dist, _) = dijkstra(self, &[(sa, 0.0)], Some(sb));
+        let (dist, _) = dijkstra(self, &[(sa, 0.0)], Some(sb), None);
         Ok((a - ca).norm() + dist[sb as usize] + (b - cb).norm())
     }
 
@@ -198,7 +227,7 @@ impl NavMesh {
             Pair::Apart => return Ok(None),
             Pair::Connected(sa, sb) => (sa, sb),
         };
-        let (dist, parent) = dijkstra(self, &[(sa, 0.0)], Some(sb));
+        let (dist, parent) = dijkstra(self, &[(sa, 0.0)], Some(sb), None);
         if !dist[sb as usize].is_finite() {
             return Ok(None);
         }

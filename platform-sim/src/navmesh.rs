@@ -25,9 +25,6 @@
 //! 5. **Erode** by `agent_radius`: a multi-source Dijkstra (octile metric) from
 //!    the border spans (fewer than four connections) removes every span closer
 //!    than the radius to a border, like Recast's `rcErodeWalkableArea`.
-//!    Passages narrower than three cells are then removed (a morphological
-//!    opening; the agent's discrete moves cannot follow them;
-//!    `remove_narrow_passages`).
 //! 6. **Islands** (connected components) smaller than `min_region_area` are
 //!    dropped.
 //! 7. **Floor**: a span is floor when its surface is the top of a floor or
@@ -69,10 +66,6 @@ pub struct NavMeshConfig {
     /// Largest vertical distance between a query point and a walking surface
     /// for the point to be on that surface (0.5, Habitat's `is_navigable`).
     pub vertical_tolerance: f64,
-    /// Remove passages narrower than three cells after the erosion (true):
-    /// the agent's discrete moves cannot follow them (see the module docs,
-    /// step 5). `false` keeps the raw eroded surface.
-    pub remove_narrow_passages: bool,
 }
 
 impl Default for NavMeshConfig {
@@ -85,7 +78,6 @@ impl Default for NavMeshConfig {
             max_slope_deg: 45.0,
             min_region_area: 1.0,
             vertical_tolerance: 0.5,
-            remove_narrow_passages: true,
         }
     }
 }
@@ -405,9 +397,6 @@ impl NavMesh {
         };
         nm.connect();
         nm.erode();
-        if config.remove_narrow_passages {
-            nm.open_narrow_passages();
-        }
         nm.drop_small_islands();
         // scenes without any floor or staircase instance (unlabelled meshes):
         // every region counts as floor
@@ -510,24 +499,23 @@ impl NavMesh {
         self.retain(&keep);
     }
 
-    /// 5b. removes passages narrower than three cells (a morphological
-    /// opening: erosion by the 4-neighbour cross, dilation by the 3 x 3
-    /// square): a span is kept when it, one of its neighbours or one of its
-    /// diagonal neighbours has all four neighbours. The agent moves 0.25 m
-    /// at headings 30 deg apart without sliding, so it cannot follow a strip
-    /// one or two cells (5-10 cm) wide for more than a step or two; left in,
-    /// such strips (a 0.40 m gap between two pieces of furniture, or
-    /// between a wall's end and a cupboard) put shortest paths where no
-    /// sequence of actions goes, and the ground-truth oracle stopped in
-    /// front of them. Areas at least three cells wide, corners included,
-    /// are unchanged.
-    fn open_narrow_passages(&mut self) {
+    /// The spans of areas at least three cells wide (a morphological
+    /// opening of the walkable surface: erosion by the 4-neighbour cross,
+    /// dilation by the 3 x 3 square): a span is kept when it, one of its
+    /// neighbours or one of its diagonal neighbours has all four
+    /// neighbours. Strips one or two cells wide (a 0.40-0.45 m gap between
+    /// two pieces of furniture) are left out: the agent's 0.25 m moves at
+    /// headings 30 deg apart, without sliding, cannot follow them.
+    ///
+    /// # Complexity
+    /// O(S).
+    pub fn wide_spans(&self) -> Vec<bool> {
         let core: Vec<bool> = self
             .spans
             .iter()
             .map(|sp| !sp.neighbours.contains(&NONE))
             .collect();
-        let keep: Vec<bool> = (0..self.spans.len())
+        (0..self.spans.len())
             .map(|s| {
                 core[s]
                     || self.spans[s]
@@ -536,10 +524,7 @@ impl NavMesh {
                         .any(|&n| n != NONE && core[n as usize])
                     || (0..4).any(|d| self.diagonal(s, d).is_some_and(|n| core[n]))
             })
-            .collect();
-        if keep.iter().any(|&k| !k) {
-            self.retain(&keep);
-        }
+            .collect()
     }
 
     /// Horizontal octile moves from span `s`: (neighbour, horizontal length).

@@ -99,7 +99,13 @@ impl Policy for RandomWalk {
 /// and stops within the success radius.
 ///
 /// # Algorithm
-/// Greedy descent of the geodesic field with one-step look-ahead over the 12
+/// The field descended is the geodesic distance over the walkable areas at
+/// least three cells wide ([`crate::NavMesh::wide_spans`]; off them, 1 km
+/// plus the plain geodesic distance): the height field connects rooms
+/// through strips one or two cells wide (a 0.40 m gap between two pieces of
+/// furniture) that 0.25 m moves at headings 30 deg apart cannot follow, and
+/// an oracle descending the plain field walked into them and stopped. STOP
+/// is decided on the plain field. Greedy descent of that field with one-step look-ahead over the 12
 /// headings reachable by turning: turn (the shorter way) towards the heading
 /// whose forward move lowers the distance most, move forward when it is the
 /// current one ([`crate::follow::choose_heading`], the heading choice of the
@@ -118,6 +124,7 @@ pub struct Oracle {
     /// Depth of the fallback search (16 actions).
     pub search_depth: usize,
     field: Option<GeodesicField>,
+    wide: Option<GeodesicField>,
     nav: Option<std::sync::Arc<crate::NavMesh>>,
     plan: VecDeque<Action>,
 }
@@ -128,6 +135,7 @@ impl Default for Oracle {
             stop_distance: 0.09,
             search_depth: 16,
             field: None,
+            wide: None,
             nav: None,
             plan: VecDeque::new(),
         }
@@ -140,11 +148,31 @@ impl Oracle {
         Oracle::default()
     }
 
-    fn dist(&self, agent: &Agent) -> f64 {
+    /// Geodesic distance from `p` to the goals (decides STOP).
+    fn goal_distance(&self, p: &nalgebra::Point3<f64>) -> f64 {
         match (&self.field, &self.nav) {
-            (Some(f), Some(n)) => f.distance(n, &agent.position()).unwrap_or(f64::INFINITY),
+            (Some(f), Some(n)) => f.distance(n, p).unwrap_or(f64::INFINITY),
             _ => f64::INFINITY,
         }
+    }
+
+    /// What the oracle descends: the geodesic distance over the areas at
+    /// least three cells wide ([`crate::NavMesh::wide_spans`]) where that
+    /// field reaches `p`, else 1 km plus the plain geodesic distance (so
+    /// that a pose off the wide areas heads back to them, or, when no goal
+    /// lies on them, the plain field is descended).
+    fn cost(&self, p: &nalgebra::Point3<f64>) -> f64 {
+        if let (Some(w), Some(n)) = (&self.wide, &self.nav)
+            && let Ok(d) = w.distance(n, p)
+            && d.is_finite()
+        {
+            return d;
+        }
+        1e3 + self.goal_distance(p)
+    }
+
+    fn dist(&self, agent: &Agent) -> f64 {
+        self.cost(&agent.position())
     }
 
     /// Shortest action sequence (BFS) to a pose strictly closer than `d0 - 0.05`
@@ -179,7 +207,7 @@ impl Oracle {
                 let mut p = path.clone();
                 p.push(a);
                 let d = self.dist(&next);
-                if d <= self.stop_distance || d < d0 - 0.05 {
+                if self.goal_distance(&next.position()) <= self.stop_distance || d < d0 - 0.05 {
                     return Some(p);
                 }
                 queue.push_back((next, p));
@@ -192,7 +220,11 @@ impl Oracle {
 impl Policy for Oracle {
     fn reset(&mut self, sim: &Simulator, episode: &Episode) {
         self.field = sim.goal_field(episode).ok();
-        self.nav = Some(sim.nav_shared());
+        let nav = sim.nav_shared();
+        self.wide = nav
+            .geodesic_field_within(&episode.view_point_positions(), &nav.wide_spans())
+            .ok();
+        self.nav = Some(nav);
         self.plan.clear();
     }
 
@@ -202,10 +234,10 @@ impl Policy for Oracle {
 
     fn act(&mut self, obs: &Observation<'_>) -> Action {
         let agent = obs.agent;
-        let d0 = self.dist(agent);
-        if d0 <= self.stop_distance {
+        if self.goal_distance(&agent.position()) <= self.stop_distance {
             return Action::Stop;
         }
+        let d0 = self.dist(agent);
         if let Some(a) = self.plan.pop_front() {
             return a;
         }
@@ -234,12 +266,7 @@ impl Policy for Oracle {
             for _ in 0..k.unsigned_abs() {
                 probe.step(nav, turn);
             }
-            probe.try_forward(nav).map(|(p, _)| {
-                self.field
-                    .as_ref()
-                    .and_then(|f| f.distance(nav, &p).ok())
-                    .unwrap_or(f64::INFINITY)
-            })
+            probe.try_forward(nav).map(|(p, _)| self.cost(&p))
         };
         let best =
             crate::follow::choose_heading(turns, 1e-3, |k| after(k).filter(|&d| d < d0 - 1e-6));

@@ -334,7 +334,7 @@ impl Policy for RenderingWalk {
 fn ratio_filter_thins_near_straight_line_episodes() {
     let mut near_one = [0usize; 2];
     let mut total = [0usize; 2];
-    for seed in [1u64, 2, 3] {
+    for seed in [1u64, 2] {
         let sim = simulator(common::house(seed, 1));
         for (k, ratio) in [0.0, 1.1].into_iter().enumerate() {
             let config = GeneratorConfig {
@@ -354,7 +354,6 @@ fn ratio_filter_thins_near_straight_line_episodes() {
                 .count();
         }
     }
-    eprintln!("near_one {near_one:?} total {total:?}");
     assert!(total[1] >= 150 && total[0] >= 150, "{total:?}");
     assert!(near_one[0] >= 20, "unfiltered: {near_one:?}");
     assert!(near_one[1] * 3 < near_one[0], "filtered: {near_one:?}");
@@ -380,8 +379,8 @@ fn default_rules_are_habitats() {
 /// The oracle across floors: the cross-floor episodes of twelve houses with
 /// 2 to 4 floors (houses where it once failed: turning back and forth
 /// between two headings whose forward probes disagreed in the last bits,
-/// or stopping in front of a one-cell passage the discrete moves cannot
-/// follow). SR >= 0.95 is required; failures are printed.
+/// or stopping in front of a passage one or two cells wide that the
+/// discrete moves cannot follow). SR >= 0.95 is required; failures are printed.
 #[test]
 fn procedural_cross_floor_oracle_many_houses() {
     let config = GeneratorConfig {

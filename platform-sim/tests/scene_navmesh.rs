@@ -50,7 +50,6 @@ fn raw_config() -> NavMeshConfig {
         agent_radius: 0.0,
         min_region_area: 0.0,
         max_step: 0.0,
-        remove_narrow_passages: false,
         ..Default::default()
     }
 }
