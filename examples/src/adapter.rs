@@ -477,7 +477,8 @@ impl<F: AgentFactory> SornavPolicy<F> {
     /// level camera the treads below are never seen and the stair's open
     /// end cannot advance. Down when the goal is more than 0.3 m below the
     /// feet and the robot is on a stair or within 2 m of a stair's upper
-    /// end; level otherwise. `None`: the camera is where it should be.
+    /// end, or when the goal is at the feet' height within 1 m of a stair's
+    /// open lower end (arrived there: look further down); level otherwise. `None`: the camera is where it should be.
     fn stair_tilt(&self, agent: &Agent, feet: &Point3<f64>) -> Option<Action> {
         let map = agent.frontier_map();
         let below = self.follower.waypoint().is_some_and(|w| w.z < feet.z - 0.3);
@@ -486,7 +487,22 @@ impl<F: AgentFactory> SornavPolicy<F> {
                 (s.upper.position.z - feet.z).abs() < 0.3
                     && (s.upper.position.xy() - feet.xy()).norm() < 2.0
             });
-        let want = if below && near_top { -self.tilt } else { 0.0 };
+        // At the open lower end of a stair going down (the robot arrived
+        // at it): the steps further down are only seen looking down.
+        let at_open_bottom = self
+            .follower
+            .waypoint()
+            .is_some_and(|w| (w.z - feet.z).abs() <= 0.3)
+            && map.stairs().iter().any(|s| {
+                s.lower.level.is_none()
+                    && s.upper.position.z > s.lower.position.z
+                    && (s.lower.position - feet).norm() < 1.0
+            });
+        let want = if (below && near_top) || at_open_bottom {
+            -self.tilt
+        } else {
+            0.0
+        };
         let half = self.tilt / 2.0;
         if self.pitch > want + half {
             Some(Action::LookDown)
@@ -620,13 +636,15 @@ impl<F: AgentFactory> SornavPolicy<F> {
                 if self.debug {
                     let last = self.agent.as_ref().map(Agent::last_outcome);
                     eprintln!(
-                        "step {step} at ({:.2},{:.2}) yaw {:.0} dispatch {id:?} {} wp ({:.2},{:.2}) path {} last {:?}",
+                        "step {step} at ({:.2},{:.2},{:.2}) yaw {:.0} dispatch {id:?} {} wp ({:.2},{:.2},{:.2}) path {} last {:?}",
                         feet.x,
                         feet.y,
+                        feet.z,
                         obs.yaw.to_degrees(),
                         mission.kind.name(),
                         mission.waypoint.x,
                         mission.waypoint.y,
+                        mission.waypoint.z,
                         mission.path.as_ref().map_or(0, Vec::len),
                         last
                     );

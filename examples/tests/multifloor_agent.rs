@@ -80,17 +80,35 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
                 zs.iter().copied().fold(f32::INFINITY, f32::min),
                 zs.iter().copied().fold(f32::NEG_INFINITY, f32::max)
             );
+            let samples: Vec<String> = trace
+                .trajectory
+                .iter()
+                .step_by(25)
+                .map(|p| format!("({:.1},{:.1},{:.2})", p[0], p[1], p[2]))
+                .collect();
+            eprintln!("  every 25 actions: {}", samples.join(" "));
             if std::env::var_os("SORNAV_MF_DUMP").is_some()
-                && let Some(s) = map.stairs().first()
+                && let Some(last) = trace.trajectory.last()
             {
-                let c = s.upper.position;
+                // The surface nearest the robot's final height per column
+                // (decimetres relative to the start floor), 5 m around it.
+                let floor0 = trace.trajectory[0][2];
+                let (cx, cy, cz) = match map.stairs().iter().find_map(|s| s.open_end()) {
+                    Some(e) => (e.position.x, e.position.y, e.position.z),
+                    None => (
+                        f64::from(last[0]),
+                        f64::from(last[1]),
+                        f64::from(last[2] - floor0),
+                    ),
+                };
+                eprintln!("  surfaces around the open stair end or the end ({cx:.1},{cy:.1},{cz:.2}), y down the page:");
                 for dy in (-25..=25).rev() {
                     let row: String = (-25..=25)
                         .map(|dx| {
-                            let v = map
-                                .surfaces_at(c.x + 0.1 * f64::from(dx), c.y + 0.1 * f64::from(dy));
-                            match v.first() {
+                            let v = map.surfaces_at(cx + 0.1 * f64::from(dx), cy + 0.1 * f64::from(dy));
+                            match v.iter().min_by(|a, b| (*a - cz).abs().total_cmp(&(*b - cz).abs())) {
                                 None => "   .".to_string(),
+                                Some(z) if dx == 0 && dy == 0 => format!("{:>4}", format!("*{}", (z * 10.0).round() as i32)),
                                 Some(z) => format!("{:4}", (z * 10.0).round() as i32),
                             }
                         })

@@ -334,10 +334,27 @@ impl MultiLevelMap {
             return Some(Location::Level(l));
         }
         let key = self.surfaces.key(p.x, p.y)?;
+        if let Some(si) = self.stairs.iter().position(|s| s.supports(key, p.z, 0.35)) {
+            return Some(Location::Stair(si));
+        }
+        // Off the eroded stair columns (the robot's centre near a stair's
+        // edge, a step not seen yet under the camera): the stair whose
+        // path passes nearest, within the robot's reach.
+        let reach = self.cfg.grid.robot_radius + 0.3;
         self.stairs
             .iter()
-            .position(|s| s.supports(key, p.z, 0.35))
-            .map(Location::Stair)
+            .enumerate()
+            .filter_map(|(si, s)| {
+                s.path
+                    .iter()
+                    .filter(|q| (q.z - p.z).abs() <= 0.45)
+                    .map(|q| (q.xy() - p.xy()).norm())
+                    .min_by(f64::total_cmp)
+                    .filter(|d| *d <= reach)
+                    .map(|d| (si, d))
+            })
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(si, _)| Location::Stair(si))
     }
 
     /// Whether the robot can stand at `p`: a traversable cell of the level
@@ -407,37 +424,43 @@ impl MultiLevelMap {
         Ok(())
     }
 
-    /// Whether the ground around `feet` (radius 0.6 m) is flat at the feet's
-    /// height: at least 70 % of the surface columns there have a surface
-    /// within `level_tolerance` of it.
+    /// Whether the ground around `feet` is flat at the feet's height: at
+    /// least 70 % of the surface columns within 0.6 m have a surface within
+    /// `level_tolerance` of it, or (a forward-looking camera at the foot of
+    /// a stair sees the floor ahead, not under itself) the flat columns
+    /// within 1.5 m cover at least half of `min_level_area`.
     fn flat_at(&self, feet: &Point3<f64>) -> bool {
         let res = self.surfaces.resolution;
         let Some(k) = self.surfaces.key(feet.x, feet.y) else {
             return false;
         };
-        let r = 0.6 / res;
+        let (near, far) = (0.6 / res, 1.5 / res);
         // Small: surface_resolution >= 0.02.
         #[allow(clippy::cast_possible_truncation)]
-        let ri = r.ceil() as i32;
+        let ri = far.ceil() as i32;
         let clearance = self.clearance();
         let tol = self.cfg.levels.level_tolerance;
-        let (mut total, mut flat) = (0usize, 0usize);
+        let (mut total, mut flat_near, mut flat_far) = (0usize, 0usize, 0usize);
         for dy in -ri..=ri {
             for dx in -ri..=ri {
-                if f64::from(dx * dx + dy * dy) > r * r {
+                let d2 = f64::from(dx * dx + dy * dy);
+                if d2 > far * far {
                     continue;
                 }
-                total += 1;
-                if self
+                let flat = self
                     .surfaces
                     .surfaces((k.0 + dx, k.1 + dy), clearance)
-                    .any(|z| (f64::from(z) - feet.z).abs() <= tol)
-                {
-                    flat += 1;
+                    .any(|z| (f64::from(z) - feet.z).abs() <= tol);
+                flat_far += usize::from(flat);
+                if d2 <= near * near {
+                    total += 1;
+                    flat_near += usize::from(flat);
                 }
             }
         }
-        flat * 10 >= total * 7
+        #[allow(clippy::cast_precision_loss)]
+        let area = flat_far as f64 * res * res;
+        flat_near * 10 >= total * 7 || area >= 0.5 * self.cfg.levels.min_level_area
     }
 
     fn clearance(&self) -> f32 {
@@ -563,6 +586,29 @@ impl MultiLevelMap {
         Ok(())
     }
 
+    /// Whether level `level`'s grid has a traversable cell within
+    /// `portal_radius` of `p` (the floor around a stair end was mapped).
+    fn mapped_near(&self, level: LevelId, p: &Point3<f64>) -> bool {
+        let Some(m) = self.maps.get(usize::from(level.0)) else {
+            return false;
+        };
+        let grid = m.grid();
+        let res = self.cfg.grid.resolution;
+        let r = self.cfg.levels.portal_radius;
+        // Bounded: portal_radius / resolution is validated small.
+        #[allow(clippy::cast_possible_truncation)]
+        let n = (r / res).ceil() as i32;
+        let Ok(c) = grid.cell_of(&p.xy()) else {
+            return false;
+        };
+        (-n..=n).any(|dy| {
+            (-n..=n).any(|dx| {
+                f64::from(dx * dx + dy * dy) * res * res <= r * r
+                    && grid.is_traversable(c.offset(dx, dy))
+            })
+        })
+    }
+
     fn portal_id(&mut self, level: LevelId, p: &Point3<f64>) -> Option<u32> {
         let cell = cell_of(&p.xy(), self.cfg.grid.resolution, "portal", 0).ok()?;
         let next = &mut self.next_portal;
@@ -625,7 +671,11 @@ impl MultiLevelMap {
                     portal,
                     position: e.position,
                 });
-                if e.level.is_none() {
+                // An open end, or an end on a level whose floor around it
+                // was never mapped (a floor found from the stair, not yet
+                // stood on): exploring it means going there.
+                let unmapped = e.level.is_some_and(|l| !self.mapped_near(l, &e.position));
+                if e.level.is_none() || unmapped {
                     hubs.stair_frontiers.insert(
                         stair_frontier_id(&self.surfaces, &e.position),
                         (ends[k], si),
@@ -816,7 +866,11 @@ impl MultiLevelMap {
                 continue;
             };
             let s = &stairs[si];
-            let level = s.lower.level.or(s.upper.level).unwrap_or(LevelId(0));
+            let level = h
+                .level
+                .or(s.lower.level)
+                .or(s.upper.level)
+                .unwrap_or(LevelId(0));
             g.frontiers.insert(
                 id,
                 FrontierNode {
@@ -978,6 +1032,26 @@ impl MultiLevelMap {
                                     path: e.path,
                                 },
                             ));
+                        }
+                    }
+                    if out.is_empty() {
+                        // A point at a stair's end on a floor not mapped
+                        // around it (a stair frontier): reached from the
+                        // stair directly.
+                        let reach = me.cfg.levels.portal_radius + 0.3;
+                        for (i, h) in me.hubs.hubs.iter().enumerate() {
+                            let d = (h.position - p).norm();
+                            if h.level == Some(l) && d <= reach {
+                                out.push((
+                                    i,
+                                    Way {
+                                        cost: d,
+                                        reverse_cost: d,
+                                        length: d,
+                                        path: vec![*p, h.position],
+                                    },
+                                ));
+                            }
                         }
                     }
                     out

@@ -115,6 +115,10 @@ struct TargetState {
     gate: TargetGate<String>,
 }
 
+/// Arrivals at the same open stair end before it is excluded like any
+/// reached frontier.
+const STAIR_END_ARRIVALS: u32 = 3;
+
 /// The SOR-Nav agent.
 ///
 /// It owns the semantic map, the frontier map (occupancy, frontiers, G_F),
@@ -143,6 +147,9 @@ pub struct Agent {
     route: Option<Route>,
     clusters: Option<ClusterGraph<FrontierId>>,
     excluded: BTreeSet<FrontierId>,
+    /// Arrivals at each open stair end (excluded after
+    /// [`STAIR_END_ARRIVALS`]).
+    stair_arrivals: BTreeMap<FrontierId, u32>,
     relocation: Option<RelocationRecord>,
     last_outcome: Option<MissionOutcome>,
     decisions: Vec<Decision>,
@@ -336,6 +343,7 @@ impl Agent {
             route: None,
             clusters: None,
             excluded: BTreeSet::new(),
+            stair_arrivals: BTreeMap::new(),
             relocation: None,
             last_outcome: None,
             decisions: Vec::new(),
@@ -629,8 +637,24 @@ impl Agent {
                 // the camera's view, a shadow behind furniture): excluding
                 // it keeps the robot from returning to it forever. A
                 // frontier that changes gets a new id and is eligible again.
-                if failed || reached {
-                    self.exclude(FrontierId(frontier.0));
+                // The open end of a stair is the exception on arrival: the
+                // robot standing there sees the next steps (the stair
+                // grows and its end gets a new id) unless the camera
+                // cannot (then a few arrivals exclude it).
+                let id = FrontierId(frontier.0);
+                if failed {
+                    self.exclude(id);
+                } else if reached {
+                    let arrivals = if self.frontiers.is_stair_frontier(id) {
+                        let n = self.stair_arrivals.entry(id).or_insert(0);
+                        *n += 1;
+                        *n
+                    } else {
+                        STAIR_END_ARRIVALS
+                    };
+                    if arrivals >= STAIR_END_ARRIVALS {
+                        self.exclude(id);
+                    }
                 }
             }
             MissionKind::Relocate { .. } => {
@@ -993,6 +1017,17 @@ impl Agent {
                         self.dispatch_as(now, step, mission, Vec::new(), "explore", reason)?
                     }
                     Some(_) => self.keep_going(now, step, reason),
+                    None if active.is_none() && self.current_level().is_none() => {
+                        // Between floors (on a stair, or on a floor not
+                        // recognised yet): nothing is known to be
+                        // exhausted; look around until the map places the
+                        // robot.
+                        self.keep_going(
+                            now,
+                            step,
+                            format!("no reachable frontier off a known floor; looking around ({reason})"),
+                        )
+                    }
                     None if active.is_none() => {
                         self.decide(
                             now,

@@ -14,7 +14,9 @@
 //!    without view points are dropped, as in Habitat.
 //! 3. **Starts** are navigable poses drawn uniformly over the walkable area
 //!    of the floor islands (every span has the same area; islands on
-//!    furniture are excluded) whose geodesic distance to the nearest
+//!    furniture are excluded), on a floor
+//!    ([`crate::NavMesh::is_on_level_floor`]: never on a stair step or a
+//!    landing between floors), whose geodesic distance to the nearest
 //!    view point lies in [1, 30] m. Episodes whose geodesic/euclidean ratio is
 //!    below 1.1 are kept only with probability 20 (r - 0.98)^2, habitat-lab's
 //!    filter against trivial straight-line episodes. The start heading is
@@ -227,9 +229,11 @@ pub fn generate_episodes(
     let nav = sim.nav();
     let scene = sim.scene();
     let mut episodes = Vec::new();
-    // starts are drawn from the spans of floor islands (never on furniture)
+    // Starts are drawn from the spans of floor islands (never on furniture)
+    // that lie on a floor (never on a stair step or a landing between
+    // floors, where no floor of the building is under the robot).
     let floor_spans: Vec<u32> = (0..nav.span_count() as u32)
-        .filter(|&s| nav.is_floor_span(s))
+        .filter(|&s| nav.is_floor_span(s) && nav.is_on_level_floor(s))
         .collect();
     if floor_spans.is_empty() {
         return Ok(episodes);
