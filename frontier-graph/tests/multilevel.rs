@@ -3,6 +3,7 @@
 //! walls or open sides, sheer drops, furniture), scanned by an analytic ray
 //! caster from the robot's eye: levels, stairs, G_F costs against a
 //! reference Dijkstra over the union of the level grids and the stairs;
+//! stair extraction against a brute-force search over the surface columns;
 //! single-floor inputs give exactly the single-floor map; bad inputs are
 //! typed errors.
 
@@ -16,6 +17,8 @@ use sornav_frontier_graph::{
     Cell, FrontierError, FrontierMap, FrontierMapConfig, LevelId, MultiLevelMap, NodeId,
     OccupancyGrid, STAIR_FRONTIER_BASE, path_cells,
 };
+use std::cmp::Reverse;
+use std::collections::{BTreeSet, BinaryHeap, HashMap, VecDeque};
 
 const EYE: f64 = 0.88;
 
@@ -56,9 +59,15 @@ fn scene_strategy() -> impl Strategy<Value = Scene> {
 /// Explores the scene: one scan per feet position (floor 0, the stair,
 /// floor 1), the graph after each, then the robot back at the first pose.
 fn explore(scene: &Scene) -> MultiLevelMap {
+    explore_first(scene, scene.feet.len())
+}
+
+/// [`explore`] with the scans from the first `n` feet positions only (a
+/// partly seen stair when `n` stops on it).
+fn explore_first(scene: &Scene, n: usize) -> MultiLevelMap {
     let mut map = MultiLevelMap::new(ml_config()).unwrap();
     let range = map.config().grid.max_range;
-    for f in &scene.feet {
+    for f in &scene.feet[..n] {
         let eye = f + Vector3::new(0.0, 0.0, EYE);
         let pts = scene.scan(&eye, 0.07, 4.8, range);
         map.update(f, &eye, &pts).unwrap();
@@ -346,4 +355,334 @@ fn bad_inputs_are_typed_errors_and_change_nothing() {
         }
     }
     assert_eq!(format!("{map:?}"), before);
+}
+
+/// A walkable surface of the brute-force stair reference: its column, its
+/// height (f32, as the surface map stores it) and the level it is on.
+#[derive(Debug, Clone, Copy)]
+struct RefNode {
+    col: (i32, i32),
+    z: f32,
+    level: Option<usize>,
+    walkable: bool,
+}
+
+/// Brute-force stair reference over the surface columns of a map, from the
+/// definitions of `stairs.rs` (not its union-find and per-component
+/// chains): every surface is a node; a node within `level_tolerance` of a
+/// floor is on that level; two nodes of 8-neighbouring columns are
+/// step-connected when their heights differ by at most the step height;
+/// an off-level node is walkable when every column within the robot radius
+/// has a surface within two step heights of it.
+struct StairReference {
+    res: f64,
+    step: f32,
+    floors: Vec<f64>,
+    nodes: Vec<RefNode>,
+    by_col: HashMap<(i32, i32), Vec<usize>>,
+}
+
+const DIRS8: [(i32, i32); 8] = [
+    (1, 0),
+    (-1, 0),
+    (0, 1),
+    (0, -1),
+    (1, 1),
+    (1, -1),
+    (-1, 1),
+    (-1, -1),
+];
+
+impl StairReference {
+    /// Reads every surface column of `map` over the scene's extent through
+    /// the public `surfaces_at`.
+    fn new(map: &MultiLevelMap, scene: &Scene) -> Self {
+        let cfg = map.config();
+        let res = cfg.levels.surface_resolution;
+        let step = cfg.grid.step_height as f32;
+        let tol = f64::from(cfg.levels.level_tolerance as f32);
+        let floors: Vec<f64> = map.levels().map(|l| l.floor_z).collect();
+        let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+        for b in &scene.boxes {
+            for a in 0..2 {
+                lo[a] = lo[a].min(b.lo[a]);
+                hi[a] = hi[a].max(b.hi[a]);
+            }
+        }
+        let key = |v: f64| (v / res).floor() as i32;
+        let mut nodes = Vec::new();
+        let mut by_col: HashMap<(i32, i32), Vec<usize>> = HashMap::new();
+        for kx in key(lo[0]) - 2..=key(hi[0]) + 2 {
+            for ky in key(lo[1]) - 2..=key(hi[1]) + 2 {
+                let (x, y) = ((f64::from(kx) + 0.5) * res, (f64::from(ky) + 0.5) * res);
+                for z in map.surfaces_at(x, y) {
+                    let level = floors
+                        .iter()
+                        .enumerate()
+                        .filter(|(_, h)| (z - **h).abs() <= tol)
+                        .min_by(|a, b| (z - a.1).abs().total_cmp(&(z - b.1).abs()))
+                        .map(|(l, _)| l);
+                    by_col.entry((kx, ky)).or_default().push(nodes.len());
+                    nodes.push(RefNode {
+                        col: (kx, ky),
+                        z: z as f32,
+                        level,
+                        walkable: false,
+                    });
+                }
+            }
+        }
+        // Walkable: the footprint disk is supported.
+        let r = cfg.grid.robot_radius / res;
+        let ri = r.ceil() as i32;
+        for i in 0..nodes.len() {
+            let RefNode { col, z, .. } = nodes[i];
+            let mut ok = true;
+            for dy in -ri..=ri {
+                for dx in -ri..=ri {
+                    if f64::from(dx * dx + dy * dy) > r * r + 1e-9 {
+                        continue;
+                    }
+                    let supported = by_col
+                        .get(&(col.0 + dx, col.1 + dy))
+                        .is_some_and(|v| v.iter().any(|&j| (nodes[j].z - z).abs() <= 2.0 * step));
+                    ok &= supported;
+                }
+            }
+            nodes[i].walkable = ok && nodes[i].level.is_none();
+        }
+        Self {
+            res,
+            step,
+            floors,
+            nodes,
+            by_col,
+        }
+    }
+
+    fn point(&self, col: (i32, i32), z: f64) -> Point3<f64> {
+        Point3::new(
+            (f64::from(col.0) + 0.5) * self.res,
+            (f64::from(col.1) + 0.5) * self.res,
+            z,
+        )
+    }
+
+    fn node_point(&self, i: usize) -> Point3<f64> {
+        self.point(self.nodes[i].col, f64::from(self.nodes[i].z))
+    }
+
+    fn col_of(&self, p: &Point3<f64>) -> (i32, i32) {
+        (
+            (p.x / self.res).floor() as i32,
+            (p.y / self.res).floor() as i32,
+        )
+    }
+
+    /// The node at a stair path point (exact column and height).
+    fn node_at(&self, p: &Point3<f64>) -> Option<usize> {
+        let z = p.z as f32;
+        self.by_col
+            .get(&self.col_of(p))?
+            .iter()
+            .copied()
+            .find(|&i| self.nodes[i].z == z)
+    }
+
+    /// Step-connected nodes of 8-neighbouring columns.
+    fn steps(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
+        let RefNode { col, z, .. } = self.nodes[i];
+        DIRS8.iter().flat_map(move |&(dx, dy)| {
+            self.by_col
+                .get(&(col.0 + dx, col.1 + dy))
+                .into_iter()
+                .flatten()
+                .copied()
+                .filter(move |&j| (self.nodes[j].z - z).abs() <= self.step)
+        })
+    }
+
+    /// The level columns a walkable off-level node is a foot of.
+    fn feet(&self, i: usize) -> Vec<(usize, (i32, i32))> {
+        if !self.nodes[i].walkable {
+            return Vec::new();
+        }
+        self.steps(i)
+            .filter_map(|j| self.nodes[j].level.map(|l| (l, self.nodes[j].col)))
+            .collect()
+    }
+
+    /// Level pairs (lower floor first) joined by a walkable step-path
+    /// through off-level surfaces: breadth-first search from every level's
+    /// feet.
+    fn joined_levels(&self) -> BTreeSet<(usize, usize)> {
+        let mut out = BTreeSet::new();
+        for a in 0..self.floors.len() {
+            let mut seen = vec![false; self.nodes.len()];
+            let mut queue: VecDeque<usize> = (0..self.nodes.len())
+                .filter(|&i| self.feet(i).iter().any(|f| f.0 == a))
+                .collect();
+            for &i in &queue {
+                seen[i] = true;
+            }
+            while let Some(i) = queue.pop_front() {
+                for (b, _) in self.feet(i) {
+                    if b != a {
+                        let pair = if self.floors[a] <= self.floors[b] {
+                            (a, b)
+                        } else {
+                            (b, a)
+                        };
+                        out.insert(pair);
+                    }
+                }
+                for j in self.steps(i) {
+                    if self.nodes[j].walkable && !std::mem::replace(&mut seen[j], true) {
+                        queue.push_back(j);
+                    }
+                }
+            }
+        }
+        out
+    }
+
+    /// Shortest walkable step-path lengths (3-D, column centres) from the
+    /// floor point of `col` on `level` to every walkable node: Dijkstra
+    /// over all nodes.
+    fn paths_from_end(&self, level: usize, col: (i32, i32)) -> HashMap<usize, f64> {
+        let start = self.point(col, self.floors[level]);
+        let mut dist: HashMap<usize, f64> = HashMap::new();
+        let mut heap = BinaryHeap::new();
+        for i in 0..self.nodes.len() {
+            if self.feet(i).contains(&(level, col)) {
+                let d = (self.node_point(i) - start).norm();
+                dist.insert(i, d);
+                heap.push((Reverse(d.to_bits()), i));
+            }
+        }
+        while let Some((Reverse(d), i)) = heap.pop() {
+            let d = f64::from_bits(d);
+            if dist[&i] < d {
+                continue;
+            }
+            for j in self.steps(i) {
+                if !self.nodes[j].walkable {
+                    continue;
+                }
+                let nd = d + (self.node_point(j) - self.node_point(i)).norm();
+                if dist.get(&j).is_none_or(|&old| nd < old) {
+                    dist.insert(j, nd);
+                    heap.push((Reverse(nd.to_bits()), j));
+                }
+            }
+        }
+        dist
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+    /// Stair extraction against the brute-force reference on random
+    /// two-floor scenes, fully or partly explored (the scans stop on the
+    /// floor or on the stair):
+    ///
+    /// * the level pairs joined by the complete stairs are exactly the
+    ///   pairs the reference joins by a walkable step-path;
+    /// * every stair's path is a chain of walkable, step-connected,
+    ///   off-level surfaces, with a level end next to a foot;
+    /// * a complete stair is at least as long as the reference's shortest
+    ///   step-path between its two ends and at most one column hop longer
+    ///   (the chain stops at the first foot of the upper level it reaches
+    ///   and then steps onto that floor: at most `hypot(sqrt(2) res, step +
+    ///   level_tolerance)` more than the best choice of last foot);
+    /// * a partly seen stair is exactly as long as the reference's shortest
+    ///   path from its level end to its open end, which rises at least
+    ///   `min_stair_rise` and is the highest-rising node the reference
+    ///   reaches from that end.
+    #[test]
+    fn stairs_match_brute_force_reference(scene in scene_strategy(), cut in 0.0f64..1.6) {
+        let n = ((cut * scene.feet.len() as f64).ceil() as usize).clamp(1, scene.feet.len());
+        let map = explore_first(&scene, n);
+        let cfg = map.config().clone();
+        let r = StairReference::new(&map, &scene);
+        let ctx = format!("{} scans {}", describe(&scene), n);
+        let level_index = |l: Option<LevelId>| l.map(|l| usize::from(l.0));
+
+        // Which levels the stairs join.
+        let found: BTreeSet<(usize, usize)> = map
+            .stairs()
+            .iter()
+            .filter(|s| s.is_complete())
+            .map(|s| (level_index(s.lower.level).unwrap(), level_index(s.upper.level).unwrap()))
+            .collect();
+        let reference = r.joined_levels();
+        if r.floors.len() <= 2 {
+            prop_assert_eq!(&found, &reference, "{}", ctx);
+        } else {
+            // With three floors a stair joins its component's lowest and
+            // highest; every pair it joins is still joined by the reference.
+            prop_assert!(found.is_subset(&reference), "{:?} vs {:?}; {}", found, reference, ctx);
+        }
+
+        let res = r.res;
+        let hop = (2f64.sqrt() * res).hypot(cfg.grid.step_height + cfg.levels.level_tolerance);
+        for s in map.stairs() {
+            // The path: level ends (if any) around a chain of nodes.
+            let path = &s.path;
+            prop_assert!(path.len() >= 2, "{:?}; {}", path, ctx);
+            let lo_end = s.lower.level.is_some();
+            let hi_end = s.upper.level.is_some();
+            let inner = &path[usize::from(lo_end)..path.len() - usize::from(hi_end)];
+            prop_assert!(!inner.is_empty(), "{}", ctx);
+            let ids: Vec<usize> = inner
+                .iter()
+                .map(|p| r.node_at(p))
+                .collect::<Option<Vec<_>>>()
+                .ok_or_else(|| TestCaseError::fail(format!("stair point not a surface; {ctx}")))?;
+            for &i in &ids {
+                prop_assert!(r.nodes[i].walkable, "unwalkable stair node {:?}; {}", r.nodes[i], ctx);
+            }
+            for w in ids.windows(2) {
+                prop_assert!(r.steps(w[0]).any(|j| j == w[1]), "not step-connected {:?}; {}", (r.nodes[w[0]], r.nodes[w[1]]), ctx);
+            }
+            let len: f64 = path.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
+            prop_assert!((len - s.length).abs() <= 1e-9 * len.max(1.0), "{}", ctx);
+            let ends = [(&s.lower, ids[0]), (&s.upper, *ids.last().unwrap())];
+            for (end, node) in ends {
+                if let Some(l) = level_index(end.level) {
+                    prop_assert!((end.position.z - r.floors[l]).abs() < 1e-9, "{}", ctx);
+                    prop_assert!(r.feet(node).contains(&(l, r.col_of(&end.position))), "end not next to its foot; {}", ctx);
+                }
+            }
+
+            // Lengths against the reference's shortest step-paths.
+            let (start, far) = if lo_end { (&s.lower, &s.upper) } else { (&s.upper, &s.lower) };
+            let sl = level_index(start.level).unwrap();
+            let dist = r.paths_from_end(sl, r.col_of(&start.position));
+            match level_index(far.level) {
+                Some(fl) => {
+                    let goal_col = r.col_of(&far.position);
+                    let best = dist
+                        .iter()
+                        .filter(|(i, _)| r.feet(**i).contains(&(fl, goal_col)))
+                        .map(|(i, d)| d + (r.node_point(*i) - far.position).norm())
+                        .fold(f64::INFINITY, f64::min);
+                    prop_assert!(best.is_finite(), "{}", ctx);
+                    prop_assert!(s.length >= best - 1e-9, "stair {} shorter than the reference {}; {}", s.length, best, ctx);
+                    prop_assert!(s.length <= best + hop + 1e-9, "stair {} longer than the reference {} + {}; {}", s.length, best, hop, ctx);
+                }
+                None => {
+                    let open = r.node_at(&far.position).unwrap();
+                    let d = dist.get(&open).copied().unwrap_or(f64::INFINITY);
+                    prop_assert!((s.length - d).abs() <= 1e-9 * d.max(1.0), "partial stair {} vs reference {}; {}", s.length, d, ctx);
+                    let hs = r.floors[sl];
+                    let rise = |i: usize| (f64::from(r.nodes[i].z) - hs).abs();
+                    prop_assert!(rise(open) >= cfg.levels.min_stair_rise, "{}", ctx);
+                    let top = dist.keys().map(|&i| rise(i)).fold(0.0, f64::max);
+                    prop_assert!(rise(open) >= top - 1e-6, "open end rises {} < {}; {}", rise(open), top, ctx);
+                }
+            }
+        }
+    }
 }

@@ -31,8 +31,8 @@
 //!   the integrations since the last call could have changed, and keeps ids
 //!   persistent (grow / shrink / merge keep the largest predecessor's id; on
 //!   a split the largest part keeps it). It reports a [`ClusterUpdate`].
-//! * **Queries**: by id, label, minimum support, horizontal radius, or a
-//!   combined [`ClusterQuery`].
+//! * **Queries**: by id, label, minimum support, horizontal radius, height
+//!   band (one floor's objects), or a combined [`ClusterQuery`].
 //! * **Persistence**: [`SemanticMap::snapshot`] / [`MapSnapshot`], and
 //!   `SemanticMap` itself implements serde `Serialize` / `Deserialize`.
 //! * **Benchmark input**: [`pcld`] reads the project's `SORPCLD1` files.

@@ -22,6 +22,10 @@ use crate::map::SemanticMap;
 ///     .within(Point3::new(1.0, 2.0, 0.0), 10.0);
 /// let toilets = q.clone().label(LabelId(14));
 /// assert_eq!(toilets.label, Some(LabelId(14)));
+/// // The same on one floor of a building: the level with its floor at
+/// // 2.8 m and the next floor at 5.6 m owns the band [2.8, 5.6).
+/// let upstairs = toilets.heights(2.8, 5.6);
+/// assert_eq!(upstairs.heights, Some((2.8, 5.6)));
 /// ```
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct ClusterQuery {
@@ -32,6 +36,10 @@ pub struct ClusterQuery {
     /// Only clusters whose centre lies within this horizontal (x, y)
     /// distance of the point (z is ignored).
     pub within: Option<(Point3<f64>, f64)>,
+    /// Only clusters whose centre height `z` lies in `[lo, hi)` (one
+    /// floor's height band; see [`heights`](Self::heights)).
+    #[serde(default)]
+    pub heights: Option<(f64, f64)>,
 }
 
 impl ClusterQuery {
@@ -53,12 +61,39 @@ impl ClusterQuery {
         self
     }
 
+    /// Restricts to centres whose height `z` lies in `[lo, hi)`: the
+    /// objects of one floor, whose band is `[floor_z, next floor_z)` (the
+    /// top floor's is `[floor_z, f64::INFINITY)`), so that a table top or
+    /// a ceiling lamp belongs to the floor below it and every object to
+    /// exactly one floor. A NaN bound matches nothing; infinite bounds are
+    /// open ends.
+    ///
+    /// # Examples
+    /// ```
+    /// use sornav_semantic_map::ClusterQuery;
+    /// // Floors at 0 m and 2.8 m: the ground floor's objects, then the
+    /// // first floor's (up to the roof).
+    /// let ground = ClusterQuery::default().heights(0.0, 2.8);
+    /// let first = ClusterQuery::default().heights(2.8, f64::INFINITY);
+    /// assert_ne!(ground, first);
+    /// ```
+    pub fn heights(mut self, lo: f64, hi: f64) -> Self {
+        self.heights = Some((lo, hi));
+        self
+    }
+
     /// Whether `c` satisfies every criterion. The radius test is
     /// `horizontal_distance(point, centre) <= radius`, so a NaN point
     /// coordinate or radius matches nothing and an infinite radius (with a
-    /// finite point) matches every centre.
+    /// finite point) matches every centre. The height test is `lo <=
+    /// centre.z < hi`, so a NaN bound matches nothing.
     pub fn matches(&self, c: &ObjectCluster) -> bool {
         if self.label.is_some_and(|l| l != c.label) || c.support < self.min_support {
+            return false;
+        }
+        if let Some((lo, hi)) = self.heights
+            && !(lo <= c.centre.z && c.centre.z < hi)
+        {
             return false;
         }
         match &self.within {
@@ -158,5 +193,27 @@ mod tests {
         let q = ClusterQuery::default().within(o, f64::NAN);
         assert!(map.query(&q).is_empty());
         assert_eq!(map.query(&ClusterQuery::default().within(o, 2.0)).len(), 1);
+    }
+
+    #[test]
+    fn height_bands_are_half_open_and_nan_matches_nothing() {
+        let mut map = SemanticMap::new(MapConfig::default(), LabelSet::household()).unwrap();
+        let pts: Vec<_> = (0..3)
+            .map(|i| LabeledPoint::new(1.025 + 0.05 * i as f32, 1.025, 0.525, LabelId(10)))
+            .collect();
+        map.integrate_points(&Point3::origin(), &pts).unwrap();
+        map.update_clusters();
+        let z = map.clusters().next().unwrap().centre.z;
+        let count = |lo: f64, hi: f64| map.query(&ClusterQuery::default().heights(lo, hi)).len();
+        assert_eq!(count(z, z + 1.0), 1); // lower bound included
+        assert_eq!(count(z - 1.0, z), 0); // upper bound excluded
+        assert_eq!(count(f64::NEG_INFINITY, f64::INFINITY), 1);
+        assert_eq!(count(f64::NAN, f64::INFINITY), 0);
+        assert_eq!(count(f64::NEG_INFINITY, f64::NAN), 0);
+        assert_eq!(count(z + 1.0, z - 1.0), 0); // empty band
+        // A query without the field (older JSON) has no height band.
+        let q: ClusterQuery =
+            serde_json::from_str(r#"{"label":null,"min_support":2,"within":null}"#).unwrap();
+        assert_eq!(q, ClusterQuery::default().min_support(2));
     }
 }

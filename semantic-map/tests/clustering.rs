@@ -353,6 +353,7 @@ proptest! {
         batches in batches_strategy(),
         px in -2.0f64..3.0, py in -2.0f64..3.0, r in 0.0f64..2.0, n in 0usize..6,
         label in label_strategy(),
+        band in (-0.5f64..1.5, 0.0f64..1.5, 0u8..8),
     ) {
         let mut map = new_map();
         for b in &batches {
@@ -369,6 +370,35 @@ proptest! {
             .collect();
         let q = ClusterQuery::default().label(label).min_support(n).within(p, r);
         prop_assert_eq!(map.query(&q).iter().map(|c| c.id).collect::<Vec<_>>(), brute);
+        // A height band [lo, hi): random, on a centre height (bounds hit
+        // exactly), open-ended, or with a NaN bound (matches nothing).
+        let zs: Vec<f64> = all.iter().map(|c| c.centre.z).collect();
+        let (lo, hi) = match band.2 {
+            0 if !zs.is_empty() => (zs[band.0.to_bits() as usize % zs.len()], band.0 + band.1),
+            1 if !zs.is_empty() => (band.0, zs[band.1.to_bits() as usize % zs.len()]),
+            2 => (f64::NEG_INFINITY, band.0),
+            3 => (band.0, f64::INFINITY),
+            4 => (f64::NAN, band.0),
+            5 => (band.0, f64::NAN),
+            _ => (band.0, band.0 + band.1),
+        };
+        let in_band: Vec<_> = all
+            .iter()
+            .filter(|c| c.label == label && c.support >= n)
+            .filter(|c| ((c.centre.x - px).powi(2) + (c.centre.y - py).powi(2)).sqrt() <= r)
+            .filter(|c| c.centre.z >= lo && c.centre.z < hi)
+            .map(|c| c.id)
+            .collect();
+        let qb = q.clone().heights(lo, hi);
+        prop_assert_eq!(map.query(&qb).iter().map(|c| c.id).collect::<Vec<_>>(), in_band);
+        if lo.is_nan() || hi.is_nan() {
+            prop_assert!(map.query(&qb).is_empty());
+        }
+        let band_only: Vec<_> = all.iter().filter(|c| c.centre.z >= lo && c.centre.z < hi).map(|c| c.id).collect();
+        prop_assert_eq!(
+            map.query(&ClusterQuery::default().heights(lo, hi)).iter().map(|c| c.id).collect::<Vec<_>>(),
+            band_only
+        );
         prop_assert_eq!(map.clusters_with_label(label).count(), all.iter().filter(|c| c.label == label).count());
         prop_assert_eq!(map.clusters_with_support(n).count(), all.iter().filter(|c| c.support >= n).count());
         prop_assert_eq!(map.clusters_within(p, r).count(),

@@ -18,7 +18,7 @@ use sornav_supervisor::{
     LlmPolicy, MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput,
     Supervisor, SupervisorCommand, normalize_label,
 };
-use sornav_target_gate::{CandidateReport, GateCommand, ObjectId, TargetGate};
+use sornav_target_gate::{CandidateReport, GateCommand, NeverVisible, ObjectId, TargetGate};
 use sornav_tsp::HorizonPlan;
 
 use crate::approach::approach_waypoint;
@@ -26,6 +26,7 @@ use crate::config::{AgentConfig, PolicyConfig};
 use crate::error::AgentError;
 use crate::observation::{Observation, ObservationReport, Sensor};
 use crate::ordering::{self, OrderingInput, Route};
+use crate::path_cost::MapPathCost;
 use crate::snapshot::{
     AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,
     RelocationRecord,
@@ -562,7 +563,10 @@ impl Agent {
                 })
                 .collect();
             report.target_detections = reports.iter().filter(|r| r.detected).count();
-            state.gate.update(&reports, &observation.pose.position)?;
+            // Ties on support go to the candidate nearest by path on the
+            // multi-level map (over the stairs), never by straight line.
+            let cost = MapPathCost::new(&mut self.frontiers, observation.pose.position);
+            state.gate.update_with(&reports, &NeverVisible, &cost);
         }
         Ok(report)
     }

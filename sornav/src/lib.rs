@@ -107,6 +107,7 @@ mod config;
 mod error;
 mod observation;
 mod ordering;
+mod path_cost;
 mod snapshot;
 mod target;
 

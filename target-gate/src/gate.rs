@@ -5,14 +5,16 @@ use serde::{Deserialize, Serialize};
 
 use crate::{
     AbandonReason, CandidateReport, CandidateTracker, GateCommand, GateConfig, GateError,
-    GateEvent, NeverVisible, ObjectId, Phase, RejectReason, Visibility, success,
+    GateEvent, NeverVisible, ObjectId, PathCost, Phase, RejectReason, Selection, StraightLine,
+    Visibility, success,
 };
 
 /// Confirms a target of one requested category.
 ///
 /// Call [`update`](Self::update) (or
-/// [`update_with_visibility`](Self::update_with_visibility)) once per sensor
-/// frame with the map's cluster snapshot, follow the [`command`](Self::command)
+/// [`update_with_visibility`](Self::update_with_visibility), or
+/// [`update_with`](Self::update_with) to choose among candidates by path
+/// cost) once per sensor frame with the map's cluster snapshot, follow the [`command`](Self::command)
 /// (navigate to the candidate, then face it), and report the navigation
 /// result with [`on_arrived`](Self::on_arrived) or
 /// [`on_approach_failed`](Self::on_approach_failed).
@@ -31,11 +33,15 @@ use crate::{
 ///
 /// # Complexity
 /// Each update is dominated by the tracker: `O((r + n) log n)` for `r`
-/// reports and `n` tracked candidates.
+/// reports and `n` tracked candidates, plus, while searching, one path-cost
+/// call per qualifying candidate tied on the largest support
+/// ([`CandidateTracker::best_by`]).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct TargetGate<C> {
     tracker: CandidateTracker<C>,
     phase: Phase,
+    #[serde(default)]
+    last_selection: Option<Selection>,
 }
 
 impl<C: PartialEq> TargetGate<C> {
@@ -47,6 +53,7 @@ impl<C: PartialEq> TargetGate<C> {
         Ok(Self {
             tracker: CandidateTracker::new(target, config)?,
             phase: Phase::Search,
+            last_selection: None,
         })
     }
 
@@ -58,6 +65,13 @@ impl<C: PartialEq> TargetGate<C> {
     /// The protocol phase.
     pub fn phase(&self) -> Phase {
         self.phase
+    }
+
+    /// The last candidate selection (made at each update while searching):
+    /// the choice and its path-cost call counts. `None` before the first
+    /// selection.
+    pub fn last_selection(&self) -> Option<&Selection> {
+        self.last_selection.as_ref()
     }
 
     /// Whether the target is confirmed.
@@ -98,8 +112,10 @@ impl<C: PartialEq> TargetGate<C> {
 
     /// One update: track candidates from the map snapshot `reports`, advance
     /// the protocol, and select a candidate when searching (`robot` is used to
-    /// break ties by distance). `visibility` supplies negative evidence when
-    /// [`GateConfig::negative_evidence`] is on.
+    /// break ties by straight-line distance; see
+    /// [`update_with`](Self::update_with) for path costs). `visibility`
+    /// supplies negative evidence when [`GateConfig::negative_evidence`] is
+    /// on.
     ///
     /// # Errors
     /// [`GateError::NonFinite`] when `robot` is not finite; nothing is
@@ -113,6 +129,44 @@ impl<C: PartialEq> TargetGate<C> {
         if !(robot.x.is_finite() && robot.y.is_finite() && robot.z.is_finite()) {
             return Err(GateError::NonFinite("robot position"));
         }
+        Ok(self.update_with(reports, visibility, &StraightLine::new(*robot)))
+    }
+
+    /// One update that chooses the candidate to approach by path cost: track
+    /// candidates from the map snapshot `reports`, advance the protocol,
+    /// and, when searching, select the best candidate by
+    /// [`CandidateTracker::best_by`] (most support, then reachable, then
+    /// lower `cost`, then smallest id). `cost` is asked only about
+    /// qualifying candidates tied on the largest support, so a shortest-path
+    /// search per call is affordable. `visibility` supplies negative
+    /// evidence when [`GateConfig::negative_evidence`] is on.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Point3;
+    /// use sornav_target_gate::{CandidateReport, GateConfig, GateEvent, NeverVisible, ObjectId, TargetGate};
+    ///
+    /// let mut gate = TargetGate::new("toilet", GateConfig::default()).unwrap();
+    /// let toilet = |id, centre| CandidateReport {
+    ///     object: ObjectId(id), category: "toilet", voxels: 40, centre, detected: true,
+    /// };
+    /// // 1 is 3 m above the robot at the origin, upstairs (20 m by the stairs);
+    /// // 2 is 3 m away on the robot's floor.
+    /// let seen = [toilet(1, Point3::new(0.0, 0.0, 3.0)), toilet(2, Point3::new(3.0, 0.0, 0.4))];
+    /// let by_path = |c: &Point3<f64>| Some(if c.z > 2.0 { 20.0 } else { 3.0 });
+    /// let mut events = Vec::new();
+    /// for _ in 0..3 {
+    ///     events = gate.update_with(&seen, &NeverVisible, &by_path);
+    /// }
+    /// assert!(events.contains(&GateEvent::Selected(ObjectId(2))));
+    /// assert_eq!(gate.last_selection().unwrap().queries, 2);
+    /// ```
+    pub fn update_with(
+        &mut self,
+        reports: &[CandidateReport<C>],
+        visibility: &dyn Visibility,
+        cost: &dyn PathCost,
+    ) -> Vec<GateEvent> {
         let summary = self.tracker.update(reports, visibility);
         let mut events: Vec<GateEvent> = summary
             .started
@@ -149,21 +203,18 @@ impl<C: PartialEq> TargetGate<C> {
             }
         }
         if self.phase == Phase::Search {
-            self.select(robot, &mut events)?;
+            self.select(cost, &mut events);
         }
-        Ok(events)
+        events
     }
 
-    fn select(
-        &mut self,
-        robot: &Point3<f64>,
-        events: &mut Vec<GateEvent>,
-    ) -> Result<(), GateError> {
-        if let Some(object) = self.tracker.best(robot)? {
+    fn select(&mut self, cost: &dyn PathCost, events: &mut Vec<GateEvent>) {
+        let selection = self.tracker.best_by(cost);
+        self.last_selection = Some(selection);
+        if let Some(object) = selection.object {
             self.phase = Phase::Approach { object };
             events.push(GateEvent::Selected(object));
         }
-        Ok(())
     }
 
     fn abandon(&mut self, object: ObjectId, reason: AbandonReason, events: &mut Vec<GateEvent>) {
@@ -252,5 +303,6 @@ impl<C: PartialEq> TargetGate<C> {
     pub fn reset(&mut self) {
         self.tracker.clear();
         self.phase = Phase::Search;
+        self.last_selection = None;
     }
 }

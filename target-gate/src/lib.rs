@@ -21,10 +21,17 @@
 //! * [`CandidateTracker`]: per-candidate evidence keyed by [`ObjectId`],
 //!   expiry, cluster merge/split remaps ([`CandidateTracker::apply_remap`]),
 //!   optional negative evidence through a [`Visibility`] callback, and
-//!   best-candidate selection (most support, then nearest).
+//!   best-candidate selection: most support, then reachable, then lowest
+//!   path cost ([`CandidateTracker::best_by`] with a [`PathCost`]), or
+//!   nearest in a straight line ([`CandidateTracker::best`],
+//!   [`StraightLine`]).
 //! * [`TargetGate`]: the tracker plus the verification protocol
 //!   ([`Phase`]: search -> approach -> verify -> confirmed, or rejected back
 //!   to search with a cool-down), driving a [`GateCommand`].
+//!   [`TargetGate::update_with`] chooses the candidate to approach by path
+//!   cost on the caller's map (an object upstairs is reached over the
+//!   stairs, so a nearer-looking one on the robot's floor may win);
+//!   [`TargetGate::update`] keeps the straight-line tie-break.
 //!
 //! The crate is standalone: categories are any `PartialEq` type, positions
 //! are nalgebra points, and all public data types are serde-serialisable.
@@ -68,6 +75,7 @@ mod error;
 mod evidence;
 mod gate;
 mod id;
+mod path_cost;
 mod protocol;
 mod remap;
 mod report;
@@ -79,6 +87,7 @@ pub use error::GateError;
 pub use evidence::{Evidence, success};
 pub use gate::TargetGate;
 pub use id::ObjectId;
+pub use path_cost::{PathCost, Selection, StraightLine};
 pub use protocol::{AbandonReason, GateCommand, GateEvent, Phase, RejectReason};
 pub use remap::RemapSummary;
 pub use report::CandidateReport;

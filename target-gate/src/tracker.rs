@@ -6,7 +6,10 @@ use std::collections::{BTreeMap, BTreeSet};
 use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 
-use crate::{CandidateReport, Evidence, GateConfig, GateError, ObjectId, Visibility};
+use crate::{
+    CandidateReport, Evidence, GateConfig, GateError, ObjectId, PathCost, Selection, StraightLine,
+    Visibility,
+};
 
 /// Everything the gate knows about one candidate.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -64,7 +67,8 @@ pub struct UpdateSummary {
 ///
 /// # Complexity
 /// An update costs `O((r + n) log n)` for `r` reports and `n` tracked
-/// candidates; selection is `O(n)`.
+/// candidates; selection is `O(n)` plus one path-cost call per candidate
+/// tied on the largest support ([`best_by`](Self::best_by)).
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct CandidateTracker<C> {
     target: C,
@@ -249,7 +253,10 @@ impl<C: PartialEq> CandidateTracker<C> {
     }
 
     /// The best qualifying candidate: most support `s_t`, then nearest to
-    /// `robot` (Euclidean distance to the cluster centre), then smallest id.
+    /// `robot` in a straight line (Euclidean distance to the cluster
+    /// centre), then smallest id. This is [`best_by`](Self::best_by) with
+    /// [`StraightLine`]; on a map with walls or several floors use
+    /// `best_by` with the map's path costs.
     ///
     /// # Complexity
     /// `O(n)` for `n` tracked candidates.
@@ -260,24 +267,108 @@ impl<C: PartialEq> CandidateTracker<C> {
         if !(robot.x.is_finite() && robot.y.is_finite() && robot.z.is_finite()) {
             return Err(GateError::NonFinite("robot position"));
         }
-        let mut best: Option<(&Track, f64)> = None;
+        Ok(self.best_by(&StraightLine::new(*robot)).object)
+    }
+
+    /// The best qualifying candidate by path cost. Ranking:
+    ///
+    /// 1. most support `s_t`;
+    /// 2. reachable (a valid cost) before unreachable;
+    /// 3. lower path cost;
+    /// 4. smallest id.
+    ///
+    /// `cost` answers for a candidate centre; `None`, NaN, infinite and
+    /// negative answers all mean unreachable (the last three are counted in
+    /// [`Selection::invalid_costs`]). An unreachable candidate is still
+    /// chosen when it alone has the most support: reachability only breaks
+    /// ties, and the caller reports a failed approach with
+    /// [`TargetGate::on_approach_failed`](crate::TargetGate::on_approach_failed).
+    ///
+    /// # Complexity
+    /// `O(n)` for `n` tracked candidates plus one `cost` call per
+    /// qualifying candidate that ties on the largest support (none when one
+    /// candidate has the most support).
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Point3;
+    /// use sornav_target_gate::{CandidateReport, CandidateTracker, GateConfig, NeverVisible, ObjectId};
+    ///
+    /// let mut tracker = CandidateTracker::new("bed", GateConfig::default()).unwrap();
+    /// let report = |id, x, z| CandidateReport {
+    ///     object: ObjectId(id), category: "bed", voxels: 50,
+    ///     centre: Point3::new(x, 0.0, z), detected: true,
+    /// };
+    /// // Two beds: one almost above the robot (upstairs), one 4 m away.
+    /// let beds = [report(1, 0.5, 3.0), report(2, 4.0, 0.5)];
+    /// for _ in 0..3 {
+    ///     tracker.update(&beds, &NeverVisible);
+    /// }
+    /// // In a straight line the upstairs bed is nearer...
+    /// assert_eq!(tracker.best(&Point3::origin()).unwrap(), Some(ObjectId(1)));
+    /// // ...but by path (12 m over the stairs) the other one wins.
+    /// let by_path = |c: &Point3<f64>| Some(if c.z > 2.0 { 12.0 } else { 4.0 });
+    /// let choice = tracker.best_by(&by_path);
+    /// assert_eq!(choice.object, Some(ObjectId(2)));
+    /// assert_eq!(choice.queries, 2);
+    /// ```
+    pub fn best_by(&self, cost: &dyn PathCost) -> Selection {
+        let mut selection = Selection::default();
+        // Pass 1: the largest support and how many qualifying candidates
+        // have it.
+        let mut top: Option<(u32, ObjectId)> = None;
         for track in self.tracks.values() {
             if !self.track_qualifies(track) {
                 continue;
             }
-            let d = nalgebra::distance(&track.centre, robot);
-            let better = match best {
-                None => true,
-                Some((b, bd)) => {
-                    track.evidence.support > b.evidence.support
-                        || (track.evidence.support == b.evidence.support && d < bd)
+            let s = track.evidence.support;
+            match top {
+                Some((best, _)) if s < best => {}
+                Some((best, _)) if s == best => selection.tied += 1,
+                _ => {
+                    top = Some((s, track.object));
+                    selection.tied = 1;
                 }
-            };
-            if better {
-                best = Some((track, d));
             }
         }
-        Ok(best.map(|(t, _)| t.object))
+        let Some((support, first)) = top else {
+            return selection;
+        };
+        if selection.tied == 1 {
+            selection.object = Some(first);
+            return selection;
+        }
+        // Pass 2: the tied candidates by (unreachable, cost, id); ids
+        // ascend, so a strict comparison keeps the smallest on ties.
+        let mut best: Option<(Option<f64>, ObjectId)> = None;
+        for track in self.tracks.values() {
+            if track.evidence.support != support || !self.track_qualifies(track) {
+                continue;
+            }
+            selection.queries += 1;
+            let c = match cost.path_cost(&track.centre) {
+                Some(c) if c.is_finite() && c >= 0.0 => Some(c),
+                Some(_) => {
+                    selection.invalid_costs += 1;
+                    None
+                }
+                None => {
+                    selection.unreachable += 1;
+                    None
+                }
+            };
+            let better = match (best, c) {
+                (None, _) => true,
+                (Some((None, _)), Some(_)) => true,
+                (Some((Some(b), _)), Some(c)) => c < b,
+                (Some(_), None) => false,
+            };
+            if better {
+                best = Some((c, track.object));
+            }
+        }
+        selection.object = best.map(|(_, o)| o);
+        selection
     }
 
     /// Marks `object` as rejected: it cannot be selected during the next

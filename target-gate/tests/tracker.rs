@@ -6,7 +6,8 @@ use std::collections::BTreeMap;
 use nalgebra::Point3;
 use proptest::prelude::*;
 use sornav_target_gate::{
-    CandidateReport, CandidateTracker, Evidence, GateConfig, NeverVisible, ObjectId,
+    CandidateReport, CandidateTracker, Evidence, GateConfig, GateEvent, NeverVisible, ObjectId,
+    Phase, StraightLine, TargetGate,
 };
 
 const TARGET: &str = "toilet";
@@ -33,6 +34,21 @@ fn obs() -> impl Strategy<Value = Obs> {
         3 => Just(Obs::Absent),
         1 => Just(Obs::Malformed),
         1 => Just(Obs::DetectedThenDuplicate),
+    ]
+}
+
+/// A path-cost answer: unreachable, malformed (NaN, negative, infinite),
+/// or a cost (with repeats, so that ties on cost occur).
+fn cost() -> impl Strategy<Value = Option<f64>> {
+    prop_oneof![
+        2 => Just(None),
+        1 => Just(Some(f64::NAN)),
+        1 => Just(Some(-1.0)),
+        1 => Just(Some(f64::INFINITY)),
+        1 => Just(Some(f64::NEG_INFINITY)),
+        1 => Just(Some(0.0)),
+        2 => Just(Some(5.0)),
+        4 => (0.0f64..20.0).prop_map(Some),
     ]
 }
 
@@ -195,6 +211,104 @@ proptest! {
             .collect();
         qualifying.sort_by(|a, b| b.0.cmp(&a.0).then(a.1.total_cmp(&b.1)).then(a.2.cmp(&b.2)));
         prop_assert_eq!(tracker.best(&robot).unwrap(), qualifying.first().map(|q| q.2));
+    }
+
+    /// Selection by path cost equals a brute-force argmin over the
+    /// qualifying candidates under the ranking (most support, reachable
+    /// first, lower cost, smaller id), with random costs including
+    /// unreachable, NaN, negative and infinite answers; the cost is asked
+    /// only about candidates tied on the largest support, once each.
+    #[test]
+    fn best_by_matches_brute_force_argmin(
+        tracks in proptest::collection::vec((0u32..6, 0u32..4, any::<bool>(), cost()), 0..8),
+    ) {
+        let cfg = GateConfig::default();
+        let mut tracker = CandidateTracker::new(TARGET, cfg).unwrap();
+        // Unique centres: the cost callback finds its candidate by centre.
+        let centre = |i: usize| Point3::new(i as f64 * 3.0 - 7.0, (i % 3) as f64, 0.5 + i as f64);
+        let report = |i: usize, detected: bool| CandidateReport {
+            object: ObjectId(i as u64),
+            category: TARGET,
+            voxels: 50,
+            centre: centre(i),
+            detected,
+        };
+        for (i, &(s, m, _, _)) in tracks.iter().enumerate() {
+            let others: Vec<_> = (0..tracks.len()).filter(|&j| j != i).map(|j| report(j, false)).collect();
+            for _ in 0..s {
+                let mut r = others.clone();
+                r.push(report(i, true));
+                tracker.update(&r, &NeverVisible);
+            }
+            for _ in 0..m {
+                tracker.update(&others, &NeverVisible);
+            }
+        }
+        for (i, &(_, _, rejected, _)) in tracks.iter().enumerate() {
+            if rejected {
+                tracker.reject(ObjectId(i as u64));
+            }
+        }
+        let asked = std::cell::RefCell::new(Vec::new());
+        let cost_of = |c: &Point3<f64>| {
+            let i = (0..tracks.len()).find(|&i| centre(i) == *c).expect("a tracked centre");
+            asked.borrow_mut().push(i as u64);
+            tracks[i].3
+        };
+        let selection = tracker.best_by(&cost_of);
+
+        // Brute force: rank every qualifying candidate by the full key.
+        let qualifying: Vec<_> = tracker
+            .tracks()
+            .filter(|t| t.evidence.support >= cfg.n_obs && t.evidence.misses <= cfg.n_miss)
+            .filter(|t| tracker.rejected_until(t.object).is_none())
+            .collect();
+        let valid = |c: Option<f64>| c.filter(|c| c.is_finite() && *c >= 0.0);
+        let key = |t: &sornav_target_gate::Track| {
+            let c = valid(tracks[t.object.0 as usize].3);
+            (std::cmp::Reverse(t.evidence.support), c.is_none(), c.unwrap_or(0.0), t.object)
+        };
+        let expected = qualifying
+            .iter()
+            .min_by(|a, b| {
+                let (ka, kb) = (key(a), key(b));
+                ka.0.cmp(&kb.0)
+                    .then(ka.1.cmp(&kb.1))
+                    .then(ka.2.total_cmp(&kb.2))
+                    .then(ka.3.cmp(&kb.3))
+            })
+            .map(|t| t.object);
+        prop_assert_eq!(selection.object, expected);
+
+        // Laziness: asked exactly about the tied candidates (when tied).
+        let top = qualifying.iter().map(|t| t.evidence.support).max();
+        let mut tied: Vec<u64> = qualifying
+            .iter()
+            .filter(|t| Some(t.evidence.support) == top)
+            .map(|t| t.object.0)
+            .collect();
+        tied.sort_unstable();
+        prop_assert_eq!(selection.tied as usize, tied.len());
+        let mut asked = asked.into_inner();
+        asked.sort_unstable();
+        if tied.len() > 1 {
+            prop_assert_eq!(&asked, &tied);
+        } else {
+            prop_assert!(asked.is_empty());
+        }
+        prop_assert_eq!(selection.queries as usize, asked.len());
+        let answers: Vec<Option<f64>> = asked.iter().map(|&i| tracks[i as usize].3).collect();
+        prop_assert_eq!(selection.unreachable as usize, answers.iter().filter(|c| c.is_none()).count());
+        prop_assert_eq!(
+            selection.invalid_costs as usize,
+            answers.iter().filter(|c| c.is_some() && valid(**c).is_none()).count()
+        );
+        // The straight-line selection is best_by with StraightLine.
+        let robot = Point3::new(0.3, -0.2, 0.0);
+        prop_assert_eq!(
+            tracker.best(&robot).unwrap(),
+            tracker.best_by(&StraightLine::new(robot)).object
+        );
     }
 
     #[test]
@@ -454,4 +568,105 @@ fn rejection_mark_survives_expiry_and_follows_remaps() {
 fn bad_robot_position_is_an_error() {
     let tracker = CandidateTracker::new(TARGET, GateConfig::default()).unwrap();
     assert!(tracker.best(&Point3::new(f64::INFINITY, 0.0, 0.0)).is_err());
+}
+
+/// Two qualifying candidates with equal support: the one nearest in a
+/// straight line is upstairs (far by path) or unreachable, so the other one
+/// is approached; `update` (straight line) keeps today's choice.
+#[test]
+fn path_cost_overrides_straight_line_distance() {
+    let robot = Point3::new(0.0, 0.0, 0.0);
+    // 1: right above the robot, one floor up; 2: 5 m away on its floor.
+    let upstairs = Point3::new(0.5, 0.0, 3.2);
+    let same_floor = Point3::new(5.0, 0.0, 0.4);
+    let reports = |detected| {
+        vec![
+            CandidateReport {
+                object: ObjectId(1),
+                category: TARGET,
+                voxels: 50,
+                centre: upstairs,
+                detected,
+            },
+            CandidateReport {
+                object: ObjectId(2),
+                category: TARGET,
+                voxels: 50,
+                centre: same_floor,
+                detected,
+            },
+        ]
+    };
+    assert!(nalgebra::distance(&robot, &upstairs) < nalgebra::distance(&robot, &same_floor));
+    // Path cost: over the stairs (14 m) for the upper floor.
+    let by_path = |c: &Point3<f64>| Some(if c.z > 2.0 { 14.0 } else { 5.2 });
+    // Unreachable: the upper floor is not mapped yet.
+    let no_stairs = |c: &Point3<f64>| (c.z < 2.0).then_some(5.2);
+    // Malformed answers for the upper floor count as unreachable.
+    let nan = |c: &Point3<f64>| Some(if c.z > 2.0 { f64::NAN } else { 5.2 });
+    for cost in [
+        &by_path as &dyn sornav_target_gate::PathCost,
+        &no_stairs,
+        &nan,
+    ] {
+        let mut gate = TargetGate::new(TARGET, GateConfig::default()).unwrap();
+        let mut events = Vec::new();
+        for _ in 0..3 {
+            events = gate.update_with(&reports(true), &NeverVisible, cost);
+        }
+        assert!(
+            events.contains(&GateEvent::Selected(ObjectId(2))),
+            "{events:?}"
+        );
+        assert_eq!(
+            gate.phase(),
+            Phase::Approach {
+                object: ObjectId(2)
+            }
+        );
+        let selection = gate.last_selection().unwrap();
+        assert_eq!((selection.tied, selection.queries), (2, 2));
+        assert_eq!(selection.object, Some(ObjectId(2)));
+    }
+    let nan_selection = {
+        let mut gate = TargetGate::new(TARGET, GateConfig::default()).unwrap();
+        for _ in 0..3 {
+            gate.update_with(&reports(true), &NeverVisible, &nan);
+        }
+        *gate.last_selection().unwrap()
+    };
+    assert_eq!(
+        (nan_selection.invalid_costs, nan_selection.unreachable),
+        (1, 0)
+    );
+    // The straight-line entry points keep choosing the nearer-looking one.
+    let mut gate = TargetGate::new(TARGET, GateConfig::default()).unwrap();
+    for _ in 0..3 {
+        gate.update(&reports(true), &robot).unwrap();
+    }
+    assert_eq!(
+        gate.phase(),
+        Phase::Approach {
+            object: ObjectId(1)
+        }
+    );
+    // More support still beats reachability: with 2 seen once more, 1 is
+    // never asked about.
+    let mut gate = TargetGate::new(TARGET, GateConfig::default()).unwrap();
+    let asked = std::cell::Cell::new(0);
+    let counting = |c: &Point3<f64>| {
+        asked.set(asked.get() + 1);
+        no_stairs(c)
+    };
+    gate.update_with(&reports(true)[1..], &NeverVisible, &counting);
+    for _ in 0..2 {
+        gate.update_with(&reports(true), &NeverVisible, &counting);
+    }
+    assert_eq!(
+        gate.phase(),
+        Phase::Approach {
+            object: ObjectId(2)
+        }
+    );
+    assert_eq!(asked.get(), 0);
 }

@@ -6,7 +6,9 @@
 //! walking past a frontier right next to the robot, a nearby frontier
 //! replaces the planned first choice when it lies within `radius` (5 m) of
 //! the robot and the first planned leg is more than `leg_ratio` (2x) as
-//! long as the leg to that nearby frontier.
+//! long as the leg to that nearby frontier. "Within" is measured by path
+//! cost (the cost matrix), so a frontier one floor up, right above the
+//! robot, is not nearby.
 
 use std::collections::HashMap;
 use std::hash::Hash;
@@ -23,8 +25,9 @@ use crate::solver::{Method, Solver, SolverConfig};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct ReplacementRule {
-    /// A frontier is *nearby* when its Euclidean distance to the robot is
-    /// at most this (metres). Default 5.0.
+    /// A frontier is *nearby* when its path cost from the robot (the cost
+    /// matrix's robot row, never a straight line) is at most this (metres
+    /// of path when costs are path lengths). Default 5.0.
     pub radius: f64,
     /// The nearby frontier replaces the planned first one when the planned
     /// first leg costs more than `leg_ratio` times its own leg. Default 2.0.

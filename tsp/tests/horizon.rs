@@ -226,3 +226,159 @@ proptest! {
         }
     }
 }
+
+/// Two floors: the robot on floor 0 at the origin, floor 1 at 3 m, a stair
+/// whose foot is at `stair` on floor 0 and whose top is right above it,
+/// `stair_len` long. Path cost between two feet positions `(x, y, floor)`:
+/// horizontal distance on one floor, via the stair otherwise.
+fn two_floor_cost(a: (f64, f64, u8), b: (f64, f64, u8), stair: (f64, f64), stair_len: f64) -> f64 {
+    let h = |p: (f64, f64), q: (f64, f64)| (p.0 - q.0).hypot(p.1 - q.1);
+    if a.2 == b.2 {
+        h((a.0, a.1), (b.0, b.1))
+    } else {
+        h((a.0, a.1), stair) + stair_len + h(stair, (b.0, b.1))
+    }
+}
+
+/// A problem whose positions are the true 3-D frontier positions (floor 1
+/// at z = 3 m) and whose costs are two-floor path costs.
+fn two_floor_problem(
+    frontiers: &[(f64, f64, u8)],
+    stair: (f64, f64),
+    stair_len: f64,
+) -> HorizonProblem<u32> {
+    let mut nodes = vec![(0.0, 0.0, 0u8)];
+    nodes.extend_from_slice(frontiers);
+    HorizonProblem {
+        robot: Point3::origin(),
+        frontiers: frontiers
+            .iter()
+            .enumerate()
+            .map(|(i, &(x, y, floor))| HorizonFrontier {
+                id: 100 + i as u32,
+                position: Point3::new(x, y, 3.0 * f64::from(floor)),
+            })
+            .collect(),
+        costs: CostMatrix::from_fn(nodes.len(), |i, j| {
+            two_floor_cost(nodes[i], nodes[j], stair, stair_len)
+        })
+        .unwrap(),
+        home: false,
+    }
+}
+
+/// A frontier right above the robot, one floor up (3 m in a straight
+/// line, 12 m over the stair), is not nearby: it does not replace a 30 m
+/// first leg, which a straight-line rule would do (3 m <= 5 m and
+/// 30 > 2 x 12). The same frontier reached with a 3 m
+/// path does, and so does one reported 100 m away in a straight line but
+/// 3 m away by path: the rule reads path costs, not positions.
+#[test]
+fn nearby_means_near_by_path_cost_not_straight_line() {
+    // 100: upstairs, directly above the robot; 101: 30 m away on floor 0.
+    // The stair's foot is 4.5 m from the robot, its top right above it.
+    let p = two_floor_problem(&[(0.0, 0.0, 1), (-30.0, 0.0, 0)], (4.5, 0.0), 3.0);
+    let robot_to = |v: usize| p.costs.cost(0, v);
+    assert_eq!(robot_to(1), 12.0); // 4.5 + 3 + 4.5
+    assert_eq!((p.frontiers[0].position - p.robot).norm(), 3.0);
+    let planner = RecedingHorizon::default();
+    let plan = planner.plan(&p, None).unwrap().unwrap();
+    // Visiting 100 first (12 + 42) beats 30 + 42: no replacement involved.
+    assert_eq!(plan.order, vec![100, 101]);
+    assert!(!plan.replaced);
+
+    // Make 100 a dead end (the route visits it last), so the planned first
+    // is 101 with a 30 m leg.
+    let dead_end = |mut p: HorizonProblem<u32>, leg: f64| {
+        let n = p.costs.len();
+        p.costs = CostMatrix::from_fn(n, |i, j| match (i, j) {
+            (0, 1) | (1, 0) => leg,
+            (1, _) if j != 1 => 1000.0,
+            _ => p.costs.cost(i, j),
+        })
+        .unwrap();
+        p
+    };
+    let far = dead_end(p.clone(), 12.0);
+    let plan = planner.plan(&far, None).unwrap().unwrap();
+    assert_eq!(plan.order, vec![101, 100]);
+    assert_eq!(far.costs.cost(0, 2), 30.0);
+    // 3 m away in a straight line, 12 m by path: not nearby.
+    let rule = ReplacementRule::default();
+    assert!(rule.replaces(30.0, 3.0, 12.0)); // what a straight line would give
+    assert!(!rule.replaces(30.0, 12.0, 12.0)); // what the path cost gives
+    assert!(!plan.replaced);
+    assert_eq!(plan.first, 101);
+
+    // Same positions, but a 3 m path: nearby, and 30 > 2 x 3 replaces.
+    let near = dead_end(p.clone(), 3.0);
+    let plan = planner.plan(&near, None).unwrap().unwrap();
+    assert_eq!(plan.order, vec![101, 100]);
+    assert!(plan.replaced);
+    assert_eq!(plan.first, 100);
+
+    // Reported 100 m away in a straight line, 3 m by path: still nearby.
+    let mut moved = near.clone();
+    moved.frontiers[0].position = Point3::new(100.0, 0.0, 0.0);
+    let plan = planner.plan(&moved, None).unwrap().unwrap();
+    assert!(plan.replaced);
+    assert_eq!(plan.first, 100);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// On random two-floor layouts (costs = path costs over one stair,
+    /// positions = true 3-D positions): the plan's decision equals the
+    /// rule applied to path costs (the nearby candidate is the cheapest leg
+    /// within the radius), a frontier right above the robot on the other
+    /// floor is never a replacement unless its path is short, and the plan
+    /// does not change when every position is moved (here: all stacked
+    /// right above the robot), so straight-line distances play no part.
+    #[test]
+    fn replacement_follows_path_costs_on_two_floors(
+        frontiers in prop::collection::vec((-12.0f64..12.0, -12.0f64..12.0, 0u8..2), 1..9),
+        stair in (3.0f64..10.0, -6.0f64..6.0),
+        stair_len in 2.0f64..6.0,
+        above in any::<bool>(),
+        radius in 2.0f64..8.0,
+    ) {
+        let mut frontiers = frontiers;
+        if above {
+            // One frontier exactly above the robot, one floor up.
+            frontiers[0] = (0.0, 0.0, 1);
+        }
+        let p = two_floor_problem(&frontiers, stair, stair_len);
+        let planner = RecedingHorizon {
+            rule: ReplacementRule { radius, leg_ratio: 2.0 },
+            ..RecedingHorizon::default()
+        };
+        let plan = planner.plan(&p, None).unwrap().unwrap();
+        let k = frontiers.len();
+        let leg = |v: usize| p.costs.cost(0, v);
+        // Reference: nearby by path cost only.
+        let nearby = (1..=k)
+            .filter(|&v| leg(v) <= radius)
+            .min_by(|&a, &b| leg(a).total_cmp(&leg(b)).then(a.cmp(&b)));
+        let planned = (plan.order[0] - 100) as usize + 1;
+        let expected = match nearby {
+            Some(v) if v != planned && leg(planned) > 2.0 * leg(v) => (v, true),
+            _ => (planned, false),
+        };
+        prop_assert_eq!((plan.first, plan.replaced), (100 + expected.0 as u32 - 1, expected.1));
+        if plan.replaced {
+            prop_assert!(leg((plan.first - 100) as usize + 1) <= radius);
+        }
+        if above && plan.replaced && plan.first == 100 {
+            // Only when the stair makes the path short enough.
+            prop_assert!(2.0 * stair.0.hypot(stair.1) + stair_len <= radius);
+        }
+        // Positions are informational: stacking them all above the robot
+        // changes nothing.
+        let mut stacked = p.clone();
+        for (i, f) in stacked.frontiers.iter_mut().enumerate() {
+            f.position = Point3::new(0.0, 0.0, 3.0 + i as f64 * 1e-3);
+        }
+        prop_assert_eq!(planner.plan(&stacked, None).unwrap().unwrap(), plan);
+    }
+}
