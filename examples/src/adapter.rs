@@ -284,6 +284,11 @@ pub struct SornavPolicy<F> {
     /// of one LOOK_UP / LOOK_DOWN (rad).
     pitch: f64,
     tilt: f64,
+    /// The followed mission's look-at point.
+    look_at: Option<Point3<f64>>,
+    /// Camera mount height (m) and half the vertical field of view (rad).
+    mount: f64,
+    half_vfov: f64,
     trace: EpisodeTrace,
     /// `SORNAV_DEBUG` is set: log every dispatch to stderr.
     debug: bool,
@@ -331,6 +336,9 @@ impl<F: AgentFactory> SornavPolicy<F> {
             turns: 12,
             pitch: 0.0,
             tilt: 30f64.to_radians(),
+            look_at: None,
+            mount: 0.88,
+            half_vfov: 0.55,
             trace: EpisodeTrace::default(),
             debug: std::env::var_os("SORNAV_DEBUG").is_some(),
         }
@@ -398,6 +406,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
 
     fn drop_mission(&mut self) {
         self.mission = None;
+        self.look_at = None;
         self.follower.clear_goal();
     }
 
@@ -442,6 +451,9 @@ impl<F: AgentFactory> SornavPolicy<F> {
         let (waypoint, look_at) = (mission.waypoint, mission.look_at);
         let path = mission.path.clone().unwrap_or_default();
         self.mission = Some(id);
+        // Only an explored frontier is looked down at (a candidate is
+        // verified with a level camera).
+        self.look_at = look_at.filter(|_| matches!(mission.kind, MissionKind::Explore { .. }));
         self.follower.set_goal(waypoint, look_at, path, step);
     }
 
@@ -498,7 +510,20 @@ impl<F: AgentFactory> SornavPolicy<F> {
                     && s.upper.position.z > s.lower.position.z
                     && (s.lower.position - feet).norm() < 1.0
             });
-        let want = if (below && near_top) || at_open_bottom {
+        // Arrived at a goal whose look-at point (an explored frontier's
+        // floor) lies below the level camera's field of view: look down at
+        // it (a stairwell's treads are only seen so).
+        let look_down = self.look_at.is_some_and(|look| {
+            self.follower.waypoint().is_some_and(|w| {
+                (w.xy() - feet.xy()).norm() < self.follower.config().path_point_radius_m
+                    && (w.z - feet.z).abs() <= 0.3
+            }) && {
+                let eye_above = feet.z + self.mount - look.z;
+                let d = (look.xy() - feet.xy()).norm();
+                eye_above > 0.0 && eye_above > d * (self.half_vfov - 0.05).tan()
+            }
+        });
+        let want = if (below && near_top) || at_open_bottom || look_down {
             -self.tilt
         } else {
             0.0
@@ -540,6 +565,11 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
             PinholeCamera::from_hfov(camera.width, camera.height, camera.hfov_deg.to_radians()),
             camera.mount_height,
         ));
+        self.mount = camera.mount_height;
+        self.half_vfov = ((camera.hfov_deg.to_radians() / 2.0).tan() * f64::from(camera.height)
+            / f64::from(camera.width))
+        .atan();
+        self.look_at = None;
         self.trace = EpisodeTrace::default();
         self.floor_z = episode.start_position.z;
         self.mission = None;

@@ -11,7 +11,9 @@ fn house(seed: u64, floors: u32) -> Simulator {
     let scene = Scene::procedural(
         seed,
         &ProceduralConfig {
-            floors: Some(floors),
+            // SORNAV_MF_ANY_FLOORS: the generator's own floor count (the
+            // houses of `sornav-sim --scenes procedural:N`).
+            floors: (std::env::var_os("SORNAV_MF_ANY_FLOORS").is_none()).then_some(floors),
             ..ProceduralConfig::default()
         },
     )
@@ -113,6 +115,38 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
                             }
                         })
                         .collect();
+                    eprintln!("  {row}");
+                }
+            }
+            if let Ok(at) = std::env::var("SORNAV_MF_AT") {
+                // Level 0's grid ('.' free, '#' occupied, ' ' unknown, 'T'
+                // traversable) and the surface nearest the floor (dm) per
+                // 0.1 m column, 3 m around x,y.
+                let v: Vec<f64> = at.split(',').filter_map(|t| t.parse().ok()).collect();
+                let (cx, cy) = (v[0], v[1]);
+                let grid = map.level_map(sornav::frontier_graph::LevelId(0)).unwrap().grid();
+                for dy in (-30..=30).rev() {
+                    let mut row = String::new();
+                    for dx in -30..=30 {
+                        let q = nalgebra::Point2::new(cx + 0.1 * f64::from(dx), cy + 0.1 * f64::from(dy));
+                        let c = grid.cell_of(&q).unwrap();
+                        let ch = if grid.is_traversable(c) {
+                            'T'
+                        } else {
+                            match grid.state(c) {
+                                sornav::frontier_graph::CellState::Free => '.',
+                                sornav::frontier_graph::CellState::Occupied => '#',
+                                _ => ' ',
+                            }
+                        };
+                        let sz = map.surfaces_at(q.x, q.y);
+                        let z = sz.iter().copied().min_by(|a, b| a.abs().total_cmp(&b.abs()));
+                        row.push(ch);
+                        row.push_str(&match z {
+                            None => "  ".to_string(),
+                            Some(z) => format!("{:>2}", ((-z * 10.0).round() as i32).clamp(-9, 99)),
+                        });
+                    }
                     eprintln!("  {row}");
                 }
             }

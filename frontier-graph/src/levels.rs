@@ -201,6 +201,10 @@ fn append(a: &mut Way, b: &Way) {
     a.path.extend(b.path.iter().skip(skip).copied());
 }
 
+/// Height (m) within which a point on the last steps of a stair counts as
+/// near the floor the stair reaches (for [`MultiLevelMap::is_traversable`]).
+const STAIR_EXIT: f64 = 0.6;
+
 /// A multi-level frontier map: floors, stairs, and G_F across them. See
 /// the module documentation of [`crate::levels`] for the model.
 ///
@@ -358,23 +362,32 @@ impl MultiLevelMap {
     }
 
     /// Whether the robot can stand at `p`: a traversable cell of the level
-    /// at `p.z`, a free cell within `portal_radius` of a stair end on that
-    /// level (the approach to the first step, inside the obstacle
-    /// inflation of the steps), or the walkable surface of a stair.
+    /// at `p.z`, a cell not known occupied within `portal_radius` of a
+    /// stair end on a level within 0.6 m of `p.z` (the approach to the
+    /// first step inside the obstacle inflation of the steps, and the way
+    /// off the last steps onto a floor not mapped yet), or the walkable
+    /// surface of a stair.
     pub fn is_traversable(&self, p: &Point3<f64>) -> bool {
         if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
             return false;
         }
-        if let Some(l) = self.level_at(p.z)
-            && let Some(m) = self.level_map(l)
-            && let Ok(c) = m.grid().cell_of(&p.xy())
-        {
-            if m.grid().is_traversable(c) {
+        // The level at the point's height, or (the last steps of a stair
+        // reach it) a level within `STAIR_EXIT` of it.
+        let tol = self.cfg.levels.robot_level_tolerance.max(STAIR_EXIT);
+        for l in self.levels().filter(|l| (l.floor_z - p.z).abs() <= tol) {
+            let Some(m) = self.level_map(l.id) else {
+                continue;
+            };
+            let Ok(c) = m.grid().cell_of(&p.xy()) else {
+                continue;
+            };
+            let on_floor = (l.floor_z - p.z).abs() <= self.cfg.levels.robot_level_tolerance;
+            if on_floor && m.grid().is_traversable(c) {
                 return true;
             }
             let near_end = self.stairs.iter().any(|s| {
                 [&s.lower, &s.upper].iter().any(|e| {
-                    e.level == Some(l)
+                    e.level == Some(l.id)
                         && (e.position.xy() - p.xy()).norm() <= self.cfg.levels.portal_radius + 0.3
                 })
             });
@@ -871,20 +884,32 @@ impl MultiLevelMap {
                 .or(s.lower.level)
                 .or(s.upper.level)
                 .unwrap_or(LevelId(0));
+            // The end on a floor not mapped yet is explored from a step off
+            // the stair onto that floor (standing on the last steps the
+            // robot is not on the floor yet).
+            let target = if h.level.is_some() {
+                step_off(s, &h.position)
+            } else {
+                h.position
+            };
+            let Ok(cell) = cell_of(&target.xy(), res, "stair", 0) else {
+                continue;
+            };
             g.frontiers.insert(
                 id,
                 FrontierNode {
                     id,
                     cells: vec![cell],
-                    centroid: h.position.xy(),
+                    centroid: target.xy(),
                     axis: Vector2::new(1.0, 0.0),
                     extent: res,
-                    viewpoint: h.position.xy(),
+                    viewpoint: target.xy(),
                     viewpoint_cell: cell,
                     level,
-                    z: h.position.z,
+                    z: target.z,
                 },
             );
+            let d = (target - h.position).norm();
             access.insert(
                 NodeId::Frontier(id),
                 (
@@ -892,8 +917,14 @@ impl MultiLevelMap {
                     vec![(
                         hub,
                         Way {
-                            path: vec![h.position],
-                            ..Way::default()
+                            cost: d,
+                            reverse_cost: d,
+                            length: d,
+                            path: if d > 0.0 {
+                                vec![target, h.position]
+                            } else {
+                                vec![h.position]
+                            },
                         },
                     )],
                 ),
@@ -1096,6 +1127,40 @@ impl MultiLevelMap {
             reverse_cost: way.reverse_cost,
         }))
     }
+}
+
+/// How far (m) past a stair's end the robot steps onto a floor not mapped
+/// yet.
+const STEP_OFF: f64 = 0.4;
+
+/// The point `STEP_OFF` past the end `end` of `s`, along the direction in
+/// which the stair's path leaves it (horizontal, at the end's height).
+fn step_off(s: &Stair, end: &Point3<f64>) -> Point3<f64> {
+    let n = s.path.len();
+    if n < 2 {
+        return *end;
+    }
+    let lower = (s.lower.position - end).norm() <= (s.upper.position - end).norm();
+    let (last, before) = if lower {
+        (s.path[0], s.path[1.min(n - 1)])
+    } else {
+        (s.path[n - 1], s.path[n - 2])
+    };
+    let mut dir = (last - before).xy();
+    // Use the last 0.5 m of the path for a stable direction.
+    for k in 2..n {
+        if dir.norm() >= 0.5 {
+            break;
+        }
+        let q = if lower { s.path[k] } else { s.path[n - 1 - k] };
+        dir = (last - q).xy();
+    }
+    let len = dir.norm();
+    if len < 1e-6 {
+        return *end;
+    }
+    let d = dir / len * STEP_OFF;
+    Point3::new(end.x + d.x, end.y + d.y, end.z)
 }
 
 /// The stable id of the stair frontier at `p`: the column and the height

@@ -7,14 +7,20 @@
 //!    are *off-level* (treads, landings, furniture tops, floors of levels
 //!    not yet known).
 //! 2. Two nodes of 8-neighbouring columns are *step-connected* when their
-//!    heights differ by at most the robot's step height. Off-level nodes
+//!    heights differ by at most the robot's step height; so are two nodes
+//!    two columns apart in one of the 8 directions when the column between
+//!    them holds no surface at all (a riser or tread edge the camera did
+//!    not resolve: seen from above at a grazing angle, a stair shows its
+//!    treads with unobserved columns between them). Off-level nodes
 //!    are grouped into step-connected components (union-find); a component
 //!    is *attached* to a level when one of its nodes is step-connected to a
 //!    node on that level (a *foot*).
-//! 3. A node is *walkable* when every column within the robot radius holds
-//!    a surface within two step heights of it: the robot's footprint is
-//!    supported (walls, railings, drop-offs and unobserved columns beside
-//!    a stair erode it).
+//! 3. A node is *walkable* when no column within the robot radius holds
+//!    only surfaces more than two step heights away from it (a wall top, a
+//!    drop-off) and at least half of those columns hold a surface within
+//!    two step heights: the robot's footprint is supported (walls,
+//!    railings and drop-offs beside a stair erode it; a few unobserved
+//!    columns do not).
 //! 4. An attached component is a **stair** when it joins two levels (the
 //!    shortest walkable chain from a foot on the lower level to a foot on
 //!    the upper one, by Dijkstra over 3-D step lengths), or when from its
@@ -48,6 +54,20 @@ use serde::{Deserialize, Serialize};
 use crate::LevelId;
 use crate::search::DIRS as DIRS8;
 use crate::surface::{ColumnKey, SurfaceMap};
+
+/// The columns step-connection looks at from `k`: the 8 neighbours, and
+/// in each of the 8 directions the column two away when the one between
+/// holds no surface (`has(column)` is false).
+pub(crate) fn links(
+    k: ColumnKey,
+    has: impl Fn(ColumnKey) -> bool,
+) -> impl Iterator<Item = ColumnKey> {
+    DIRS8.into_iter().flat_map(move |(dx, dy)| {
+        let near = (k.0 + dx, k.1 + dy);
+        let far = (!has(near)).then_some((k.0 + 2 * dx, k.1 + 2 * dy));
+        std::iter::once(near).chain(far)
+    })
+}
 
 /// One end of a [`Stair`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -178,8 +198,7 @@ pub(crate) fn extract(map: &SurfaceMap, levels: &[f64], p: &Params) -> Extractio
     // (node, level, on-level column)
     let mut feet: Vec<(usize, usize, ColumnKey)> = Vec::new();
     for (i, &(k, z)) in off.iter().enumerate() {
-        for (dx, dy) in DIRS8 {
-            let n = (k.0 + dx, k.1 + dy);
+        for n in links(k, |c| col_nodes.contains_key(&c)) {
             let Some(v) = col_nodes.get(&n) else { continue };
             for &(z2, kind) in v {
                 if (z2 - z).abs() > p.step {
@@ -213,11 +232,16 @@ pub(crate) fn extract(map: &SurfaceMap, levels: &[f64], p: &Params) -> Extractio
         .filter(|&(dx, dy)| f64::from(dx * dx + dy * dy) <= r * r + 1e-9)
         .collect();
     let supported = |k: ColumnKey, z: f32| {
-        disk.iter().all(|&(dx, dy)| {
-            col_nodes
-                .get(&(k.0 + dx, k.1 + dy))
-                .is_some_and(|v| v.iter().any(|(z2, _)| (z2 - z).abs() <= 2.0 * p.step))
-        })
+        let mut held = 0;
+        for &(dx, dy) in &disk {
+            if let Some(v) = col_nodes.get(&(k.0 + dx, k.1 + dy)) {
+                if !v.iter().any(|(z2, _)| (z2 - z).abs() <= 2.0 * p.step) {
+                    return false;
+                }
+                held += 1;
+            }
+        }
+        2 * held >= disk.len()
     };
     let cell_area = res * res;
     let mut out = Extraction::default();
@@ -346,8 +370,7 @@ fn chain(
             best_end = Some((i, d));
         }
         let (k, z) = off[i];
-        for (dx, dy) in DIRS8 {
-            let n = (k.0 + dx, k.1 + dy);
+        for n in links(k, |c| col_nodes.contains_key(&c)) {
             let Some(v) = col_nodes.get(&n) else { continue };
             for &(z2, kind) in v {
                 let Kind::Off(j) = kind else { continue };

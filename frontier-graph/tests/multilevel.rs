@@ -437,19 +437,22 @@ impl StairReference {
         let ri = r.ceil() as i32;
         for i in 0..nodes.len() {
             let RefNode { col, z, .. } = nodes[i];
-            let mut ok = true;
+            // No column of the disk holds only far surfaces; at least half
+            // hold a near one (unobserved columns are neither).
+            let (mut ok, mut held, mut total) = (true, 0usize, 0usize);
             for dy in -ri..=ri {
                 for dx in -ri..=ri {
                     if f64::from(dx * dx + dy * dy) > r * r + 1e-9 {
                         continue;
                     }
-                    let supported = by_col
-                        .get(&(col.0 + dx, col.1 + dy))
-                        .is_some_and(|v| v.iter().any(|&j| (nodes[j].z - z).abs() <= 2.0 * step));
-                    ok &= supported;
+                    total += 1;
+                    if let Some(v) = by_col.get(&(col.0 + dx, col.1 + dy)) {
+                        held += 1;
+                        ok &= v.iter().any(|&j| (nodes[j].z - z).abs() <= 2.0 * step);
+                    }
                 }
             }
-            nodes[i].walkable = ok && nodes[i].level.is_none();
+            nodes[i].walkable = ok && 2 * held >= total && nodes[i].level.is_none();
         }
         Self {
             res,
@@ -489,15 +492,18 @@ impl StairReference {
             .find(|&i| self.nodes[i].z == z)
     }
 
-    /// Step-connected nodes of 8-neighbouring columns.
+    /// Step-connected nodes of 8-neighbouring columns, and of columns two
+    /// away in those directions across a column without any surface.
     fn steps(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
         let RefNode { col, z, .. } = self.nodes[i];
         DIRS8.iter().flat_map(move |&(dx, dy)| {
-            self.by_col
-                .get(&(col.0 + dx, col.1 + dy))
-                .into_iter()
-                .flatten()
-                .copied()
+            let near = (col.0 + dx, col.1 + dy);
+            let mut cols = vec![near];
+            if !self.by_col.contains_key(&near) {
+                cols.push((col.0 + 2 * dx, col.1 + 2 * dy));
+            }
+            cols.into_iter()
+                .flat_map(|c| self.by_col.get(&c).into_iter().flatten().copied())
                 .filter(move |&j| (self.nodes[j].z - z).abs() <= self.step)
         })
     }

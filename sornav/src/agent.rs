@@ -120,6 +120,14 @@ struct TargetState {
 /// reached frontier.
 const STAIR_END_ARRIVALS: u32 = 3;
 
+/// How near (m, horizontally; vertically within a step) the robot must be
+/// to a stair end to count as standing at it.
+const STAIR_END_REACH: f64 = 0.4;
+
+/// How long the robot stands at a reached frontier before it is excluded
+/// (two control steps at 2 Hz: time to look at it).
+const LOOK_TIME: Duration = Duration::from_secs(1);
+
 /// The SOR-Nav agent.
 ///
 /// It owns the semantic map, the frontier map (occupancy, frontiers, G_F),
@@ -148,9 +156,8 @@ pub struct Agent {
     route: Option<Route>,
     clusters: Option<ClusterGraph<FrontierId>>,
     excluded: BTreeSet<FrontierId>,
-    /// Arrivals at each open stair end (excluded after
-    /// [`STAIR_END_ARRIVALS`]).
-    stair_arrivals: BTreeMap<FrontierId, u32>,
+    /// Arrivals at each frontier and the time of the first.
+    arrivals: BTreeMap<FrontierId, (u32, Duration)>,
     relocation: Option<RelocationRecord>,
     last_outcome: Option<MissionOutcome>,
     decisions: Vec<Decision>,
@@ -201,7 +208,11 @@ fn explore_mission(graph: &FrontierGraph, id: FrontierId) -> Option<Mission> {
             frontier: ExecFrontierId(id.0),
         },
         node.viewpoint3(),
-    );
+    )
+    // The frontier's floor: a platform that can tilt its camera looks at
+    // it on arrival (the near floor and a stairwell's treads lie below a
+    // level camera's view).
+    .with_look_at(Point3::new(node.centroid.x, node.centroid.y, node.z));
     Some(match robot_path(graph, id) {
         Some(p) => mission.with_path(p),
         None => mission,
@@ -344,7 +355,7 @@ impl Agent {
             route: None,
             clusters: None,
             excluded: BTreeSet::new(),
-            stair_arrivals: BTreeMap::new(),
+            arrivals: BTreeMap::new(),
             relocation: None,
             last_outcome: None,
             decisions: Vec::new(),
@@ -641,22 +652,24 @@ impl Agent {
                 // the camera's view, a shadow behind furniture): excluding
                 // it keeps the robot from returning to it forever. A
                 // frontier that changes gets a new id and is eligible again.
-                // The open end of a stair is the exception on arrival: the
-                // robot standing there sees the next steps (the stair
-                // grows and its end gets a new id) unless the camera
-                // cannot (then a few arrivals exclude it).
+                // A frontier is excluded once the robot has stood at it
+                // for a moment (the platform looks at it on arrival, down
+                // if its floor is below the camera's view) and it is still
+                // there. An open stair end gets more arrivals: standing
+                // there shows the next steps (the stair grows and its end
+                // gets a new id) unless the camera cannot see them.
                 let id = FrontierId(frontier.0);
                 if failed {
                     self.exclude(id);
-                } else if reached {
-                    let arrivals = if self.frontiers.is_stair_frontier(id) {
-                        let n = self.stair_arrivals.entry(id).or_insert(0);
-                        *n += 1;
-                        *n
-                    } else {
+                } else if reached && !self.short_of_stair_end(id) {
+                    let (n, first) = self.arrivals.entry(id).or_insert((0, outcome.at));
+                    *n += 1;
+                    let needed = if self.frontiers.is_stair_frontier(id) {
                         STAIR_END_ARRIVALS
+                    } else {
+                        2
                     };
-                    if arrivals >= STAIR_END_ARRIVALS {
+                    if *n >= needed && outcome.at.saturating_sub(*first) >= LOOK_TIME {
                         self.exclude(id);
                     }
                 }
@@ -671,6 +684,22 @@ impl Agent {
             }
         }
         self.last_outcome = Some(outcome);
+    }
+
+    /// Whether `frontier` is a stair end the robot has not stood at yet
+    /// (the mission's arrival radius is reached a few steps early on a
+    /// stair; only standing at the end shows what lies beyond it).
+    fn short_of_stair_end(&self, frontier: FrontierId) -> bool {
+        if !self.frontiers.is_stair_frontier(frontier) {
+            return false;
+        }
+        let (Some(pose), Some(node)) = (self.pose, self.frontiers.graph().frontier(frontier))
+        else {
+            return false;
+        };
+        let end = node.viewpoint3();
+        (end.xy() - pose.position.xy()).norm() > STAIR_END_REACH
+            || (end.z - pose.position.z).abs() > self.config.frontier.grid.step_height
     }
 
     fn decide(
