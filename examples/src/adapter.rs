@@ -292,6 +292,8 @@ pub struct SornavPolicy<F> {
     trace: EpisodeTrace,
     /// `SORNAV_DEBUG` is set: log every dispatch to stderr.
     debug: bool,
+    /// `SORNAV_DEBUG_ACTIONS` is set: log every action to stderr.
+    debug_actions: bool,
 }
 
 impl<F> std::fmt::Debug for SornavPolicy<F> {
@@ -341,6 +343,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
             half_vfov: 0.55,
             trace: EpisodeTrace::default(),
             debug: std::env::var_os("SORNAV_DEBUG").is_some(),
+            debug_actions: std::env::var_os("SORNAV_DEBUG_ACTIONS").is_some(),
         }
     }
 
@@ -608,6 +611,16 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         self.pitch = obs.pitch;
         self.after_last_action(&feet, step);
         let action = self.decide(obs, &feet, step);
+        if self.debug_actions {
+            eprintln!(
+                "act {step} at ({:.2},{:.2},{:.2}) yaw {:.0} pitch {:.0}: {action:?}",
+                feet.x,
+                feet.y,
+                feet.z,
+                obs.yaw.to_degrees(),
+                obs.pitch.to_degrees()
+            );
+        }
         self.follower.record(&feet, obs.yaw, action);
         self.last_act_end = Some(Instant::now());
         action

@@ -817,6 +817,33 @@ impl MultiLevelMap {
             .collect()
     }
 
+    /// A robot neither on a floor nor on a recognised stair (between the
+    /// steps the map resolved, over an unobserved tread): a straight way
+    /// to the nearest hub within `portal_radius + 1` m, so that it can
+    /// rejoin the graph.
+    fn nearest_hub_access(&self, p: &Point3<f64>) -> Vec<(usize, Way)> {
+        let reach = self.cfg.levels.portal_radius + 1.0;
+        self.hubs
+            .hubs
+            .iter()
+            .enumerate()
+            .map(|(i, h)| (i, (h.position - p).norm()))
+            .filter(|&(_, d)| d <= reach)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, d)| {
+                vec![(
+                    i,
+                    Way {
+                        cost: d,
+                        reverse_cost: d,
+                        length: d,
+                        path: vec![*p, self.hubs.hubs[i].position],
+                    },
+                )]
+            })
+            .unwrap_or_default()
+    }
+
     /// Builds the composed graph.
     fn compose(&mut self, robot: &Point3<f64>, location: Option<Location>, stairs: &[Stair]) {
         let res = self.cfg.grid.resolution;
@@ -849,7 +876,7 @@ impl MultiLevelMap {
             match location {
                 Some(Location::Level(l)) => (Some(l), self.level_access(l, NodeId::Robot)),
                 Some(Location::Stair(si)) => (None, self.stair_access(si, robot)),
-                None => (None, Vec::new()),
+                None => (None, self.nearest_hub_access(robot)),
             },
         );
         if g.home.is_some() {
@@ -875,9 +902,6 @@ impl MultiLevelMap {
         }
         for (&id, &(hub, si)) in &self.hubs.stair_frontiers {
             let h = &self.hubs.hubs[hub];
-            let Ok(cell) = cell_of(&h.position.xy(), res, "stair", 0) else {
-                continue;
-            };
             let s = &stairs[si];
             let level = h
                 .level

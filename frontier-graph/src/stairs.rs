@@ -21,12 +21,15 @@
 //!    two step heights: the robot's footprint is supported (walls,
 //!    railings and drop-offs beside a stair erode it; a few unobserved
 //!    columns do not).
-//! 4. An attached component is a **stair** when it joins two levels (the
-//!    shortest walkable chain from a foot on the lower level to a foot on
-//!    the upper one, by Dijkstra over 3-D step lengths), or when from its
-//!    one level it climbs or descends at least `min_stair_rise` over
-//!    walkable nodes (a partly seen stair: its far end is the walkable node
-//!    farthest in height from the level; exploring it reveals more). A
+//! 4. An attached component gives a **stair** for each pair of its levels
+//!    adjacent in height that a walkable chain joins (the shortest one from
+//!    a foot on the lower level to a foot on the upper one, by Dijkstra
+//!    over 3-D step lengths; one stairwell may join several floors), and a
+//!    *partly seen* stair wherever it climbs or descends at least
+//!    `min_stair_rise` over walkable nodes beyond its levels: below the
+//!    lowest, above the highest, and from both sides of a pair not joined
+//!    yet (its far end is the walkable node farthest in height in that
+//!    direction; exploring it reveals more). A
 //!    sheer drop is never step-connected, so it stays an obstacle; furniture
 //!    tops are not attached (their edge is higher than a step).
 //! 5. Inside attached components, a flat area of at least `min_level_area`
@@ -282,21 +285,32 @@ pub(crate) fn extract(map: &SurfaceMap, levels: &[f64], p: &Params) -> Extractio
         attached.sort_unstable();
         attached.dedup();
         attached.sort_by(|&a, &b| levels[a].total_cmp(&levels[b]));
-        let start_level = attached[0];
-        let goal_level = (attached.len() > 1).then(|| attached[attached.len() - 1]);
-        if let Some(stair) = chain(
-            &off,
-            &walk,
-            &col_nodes,
-            cf,
-            levels,
-            start_level,
-            goal_level,
-            map,
-            p,
-        ) {
-            out.stairs.push(stair);
+        // One stair per pair of levels adjacent in height (a stairwell
+        // can join several floors); where the pair is not joined by a
+        // walkable chain, a partly seen stair from each side; and the
+        // partly seen continuations below the lowest and above the
+        // highest level.
+        let run = |start: usize, goal: Option<usize>, dir: f32| {
+            chain(
+                &off, &walk, &col_nodes, cf, levels, start, goal, dir, map, p,
+            )
+        };
+        for w in attached.windows(2) {
+            match run(w[0], Some(w[1]), 1.0) {
+                Some(stair) => out.stairs.push(stair),
+                None => out.stairs.extend(
+                    [run(w[0], None, 1.0), run(w[1], None, -1.0)]
+                        .into_iter()
+                        .flatten(),
+                ),
+            }
         }
+        let (lowest, highest) = (attached[0], attached[attached.len() - 1]);
+        out.stairs.extend(
+            [run(lowest, None, -1.0), run(highest, None, 1.0)]
+                .into_iter()
+                .flatten(),
+        );
     }
     out.stairs.sort_by(|a, b| {
         (a.lower.position.x, a.lower.position.y, a.lower.position.z)
@@ -312,8 +326,10 @@ fn point(map: &SurfaceMap, k: ColumnKey, z: f64) -> Point3<f64> {
 }
 
 /// Dijkstra over the walkable nodes of one component from the feet on
-/// `start` to the feet on `goal` (or to the node farthest in height from
-/// `start` when there is no goal level).
+/// `start` to the feet on `goal` (`None` when they are not joined), or,
+/// without a goal level, to the node farthest from `start` in the
+/// direction `dir` (+1 up, -1 down) when it rises at least
+/// `min_stair_rise`.
 #[allow(clippy::too_many_arguments)]
 fn chain(
     off: &[(ColumnKey, f32)],
@@ -323,6 +339,7 @@ fn chain(
     levels: &[f64],
     start: usize,
     goal: Option<usize>,
+    dir: f32,
     map: &SurfaceMap,
     p: &Params,
 ) -> Option<Stair> {
@@ -365,8 +382,11 @@ fn chain(
             reached_goal = Some((i, col));
             break;
         }
-        let rise = (f64::from(off[i].1) - hs).abs();
-        if best_end.is_none_or(|(b, _)| rise > (f64::from(off[b].1) - hs).abs() + 1e-6) {
+        let rise = (f64::from(off[i].1) - hs) * f64::from(dir);
+        if rise > 0.0
+            && best_end
+                .is_none_or(|(b, _)| rise > (f64::from(off[b].1) - hs) * f64::from(dir) + 1e-6)
+        {
             best_end = Some((i, d));
         }
         let (k, z) = off[i];
@@ -388,6 +408,7 @@ fn chain(
     }
     let (end, end_col) = match (reached_goal, goal) {
         (Some((i, col)), Some(_)) => (i, Some(col)),
+        (None, Some(_)) => return None,
         _ => {
             let (i, _) = best_end?;
             if (f64::from(off[i].1) - hs).abs() < p.min_stair_rise {

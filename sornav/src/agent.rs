@@ -120,6 +120,10 @@ struct TargetState {
 /// reached frontier.
 const STAIR_END_ARRIVALS: u32 = 3;
 
+/// A robot off a known floor with nothing reachable retreats to the last
+/// pose with a reachable frontier when it is farther than this (m).
+const RETREAT_MIN_M: f64 = 0.3;
+
 /// How near (m, horizontally; vertically within a step) the robot must be
 /// to a stair end to count as standing at it.
 const STAIR_END_REACH: f64 = 0.4;
@@ -158,6 +162,8 @@ pub struct Agent {
     excluded: BTreeSet<FrontierId>,
     /// Arrivals at each frontier and the time of the first.
     arrivals: BTreeMap<FrontierId, (u32, Duration)>,
+    /// The last pose at which a frontier was reachable.
+    last_placed: Option<Point3<f64>>,
     relocation: Option<RelocationRecord>,
     last_outcome: Option<MissionOutcome>,
     decisions: Vec<Decision>,
@@ -356,6 +362,7 @@ impl Agent {
             clusters: None,
             excluded: BTreeSet::new(),
             arrivals: BTreeMap::new(),
+            last_placed: None,
             relocation: None,
             last_outcome: None,
             decisions: Vec::new(),
@@ -658,13 +665,16 @@ impl Agent {
                 // there. An open stair end gets more arrivals: standing
                 // there shows the next steps (the stair grows and its end
                 // gets a new id) unless the camera cannot see them.
+                // A failed climb is retried a few times (a re-plan on the
+                // grown map often succeeds) before the end is excluded.
                 let id = FrontierId(frontier.0);
-                if failed {
+                let stair = self.frontiers.is_stair_frontier(id);
+                if failed && !stair {
                     self.exclude(id);
-                } else if reached && !self.short_of_stair_end(id) {
+                } else if failed || (reached && !self.short_of_stair_end(id)) {
                     let (n, first) = self.arrivals.entry(id).or_insert((0, outcome.at));
                     *n += 1;
-                    let needed = if self.frontiers.is_stair_frontier(id) {
+                    let needed = if stair {
                         STAIR_END_ARRIVALS
                     } else {
                         2
@@ -971,6 +981,9 @@ impl Agent {
             }
             _ => None,
         };
+        if route.is_some() {
+            self.last_placed = Some(pose.position);
+        }
         self.route = route;
         self.clusters = Some(cg);
         let result = match command {
@@ -1053,13 +1066,32 @@ impl Agent {
                     None if active.is_none() && self.current_level().is_none() => {
                         // Between floors (on a stair, or on a floor not
                         // recognised yet): nothing is known to be
-                        // exhausted; look around until the map places the
-                        // robot.
-                        self.keep_going(
-                            now,
-                            step,
-                            format!("no reachable frontier off a known floor; looking around ({reason})"),
-                        )
+                        // exhausted. Go back to where the map last gave
+                        // the robot somewhere to go; without such a place,
+                        // look around until the map places the robot.
+                        match self.last_placed {
+                            Some(back) if (back - pose.position).norm() > RETREAT_MIN_M => {
+                                let mission = Mission::new(
+                                    MissionKind::Relocate {
+                                        cluster: ExecClusterId(u64::MAX),
+                                    },
+                                    back,
+                                );
+                                self.dispatch_as(
+                                    now,
+                                    step,
+                                    mission,
+                                    vec![pose.position, back],
+                                    "retreat",
+                                    format!("no reachable frontier off a known floor: back to the last place with one ({reason})"),
+                                )?
+                            }
+                            _ => self.keep_going(
+                                now,
+                                step,
+                                format!("no reachable frontier off a known floor; looking around ({reason})"),
+                            ),
+                        }
                     }
                     None if active.is_none() => {
                         self.decide(
