@@ -164,6 +164,8 @@ pub struct Agent {
     arrivals: BTreeMap<FrontierId, (u32, Duration)>,
     /// The last pose at which a frontier was reachable.
     last_placed: Option<Point3<f64>>,
+    /// The excluded stair ends were retried once (see `retry_stairs`).
+    stairs_retried: bool,
     relocation: Option<RelocationRecord>,
     last_outcome: Option<MissionOutcome>,
     decisions: Vec<Decision>,
@@ -363,6 +365,7 @@ impl Agent {
             excluded: BTreeSet::new(),
             arrivals: BTreeMap::new(),
             last_placed: None,
+            stairs_retried: false,
             relocation: None,
             last_outcome: None,
             decisions: Vec::new(),
@@ -473,6 +476,7 @@ impl Agent {
         self.plan = None;
         self.route = None;
         self.relocation = None;
+        self.stairs_retried = false;
         let state = self.target.insert(TargetState { target, gate });
         Ok(&state.target)
     }
@@ -694,6 +698,24 @@ impl Agent {
             }
         }
         self.last_outcome = Some(outcome);
+    }
+
+    /// Once per target: when the floor is exhausted while stair ends of
+    /// G_F are excluded (failed climbs, arrivals that showed nothing), they
+    /// are made eligible again. Returns whether any was.
+    fn retry_stairs(&mut self, stairs: Vec<FrontierId>) -> bool {
+        if self.stairs_retried {
+            return false;
+        }
+        let mut any = false;
+        for id in stairs {
+            if self.excluded.remove(&id) {
+                self.arrivals.remove(&id);
+                any = true;
+            }
+        }
+        self.stairs_retried = any;
+        any
     }
 
     /// Whether `frontier` is a stair end the robot has not stood at yet
@@ -984,6 +1006,11 @@ impl Agent {
         if route.is_some() {
             self.last_placed = Some(pose.position);
         }
+        let graph_stairs: Vec<FrontierId> = graph
+            .nodes()
+            .map(|n| n.id)
+            .filter(|&id| self.frontiers.is_stair_frontier(id))
+            .collect();
         self.route = route;
         self.clusters = Some(cg);
         let result = match command {
@@ -1093,6 +1120,11 @@ impl Agent {
                             ),
                         }
                     }
+                    None if active.is_none() && self.retry_stairs(graph_stairs) => self.keep_going(
+                        now,
+                        step,
+                        format!("floor exhausted: retrying the excluded stair ends once ({reason})"),
+                    ),
                     None if active.is_none() => {
                         self.decide(
                             now,
