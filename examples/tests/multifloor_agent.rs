@@ -103,14 +103,22 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
                         f64::from(last[2] - floor0),
                     ),
                 };
-                eprintln!("  surfaces around the open stair end or the end ({cx:.1},{cy:.1},{cz:.2}), y down the page:");
+                eprintln!(
+                    "  surfaces around the open stair end or the end ({cx:.1},{cy:.1},{cz:.2}), y down the page:"
+                );
                 for dy in (-25..=25).rev() {
                     let row: String = (-25..=25)
                         .map(|dx| {
-                            let v = map.surfaces_at(cx + 0.1 * f64::from(dx), cy + 0.1 * f64::from(dy));
-                            match v.iter().min_by(|a, b| (*a - cz).abs().total_cmp(&(*b - cz).abs())) {
+                            let v =
+                                map.surfaces_at(cx + 0.1 * f64::from(dx), cy + 0.1 * f64::from(dy));
+                            match v
+                                .iter()
+                                .min_by(|a, b| (*a - cz).abs().total_cmp(&(*b - cz).abs()))
+                            {
                                 None => "   .".to_string(),
-                                Some(z) if dx == 0 && dy == 0 => format!("{:>4}", format!("*{}", (z * 10.0).round() as i32)),
+                                Some(z) if dx == 0 && dy == 0 => {
+                                    format!("{:>4}", format!("*{}", (z * 10.0).round() as i32))
+                                }
                                 Some(z) => format!("{:4}", (z * 10.0).round() as i32),
                             }
                         })
@@ -124,11 +132,17 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
                 // 0.1 m column, 3 m around x,y.
                 let v: Vec<f64> = at.split(',').filter_map(|t| t.parse().ok()).collect();
                 let (cx, cy) = (v[0], v[1]);
-                let grid = map.level_map(sornav::frontier_graph::LevelId(0)).unwrap().grid();
+                let grid = map
+                    .level_map(sornav::frontier_graph::LevelId(0))
+                    .unwrap()
+                    .grid();
                 for dy in (-30..=30).rev() {
                     let mut row = String::new();
                     for dx in -30..=30 {
-                        let q = nalgebra::Point2::new(cx + 0.1 * f64::from(dx), cy + 0.1 * f64::from(dy));
+                        let q = nalgebra::Point2::new(
+                            cx + 0.1 * f64::from(dx),
+                            cy + 0.1 * f64::from(dy),
+                        );
                         let c = grid.cell_of(&q).unwrap();
                         let ch = if grid.is_traversable(c) {
                             'T'
@@ -140,7 +154,10 @@ fn cross_floor(houses: &[u64], floors: u32, per_category: usize) -> (usize, usiz
                             }
                         };
                         let sz = map.surfaces_at(q.x, q.y);
-                        let z = sz.iter().copied().min_by(|a, b| a.abs().total_cmp(&b.abs()));
+                        let z = sz
+                            .iter()
+                            .copied()
+                            .min_by(|a, b| a.abs().total_cmp(&b.abs()));
                         row.push(ch);
                         row.push_str(&match z {
                             None => "  ".to_string(),

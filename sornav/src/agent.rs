@@ -678,11 +678,7 @@ impl Agent {
                 } else if failed || (reached && !self.short_of_stair_end(id)) {
                     let (n, first) = self.arrivals.entry(id).or_insert((0, outcome.at));
                     *n += 1;
-                    let needed = if stair {
-                        STAIR_END_ARRIVALS
-                    } else {
-                        2
-                    };
+                    let needed = if stair { STAIR_END_ARRIVALS } else { 2 };
                     if *n >= needed && outcome.at.saturating_sub(*first) >= LOOK_TIME {
                         self.exclude(id);
                     }
@@ -1123,7 +1119,9 @@ impl Agent {
                     None if active.is_none() && self.retry_stairs(graph_stairs) => self.keep_going(
                         now,
                         step,
-                        format!("floor exhausted: retrying the excluded stair ends once ({reason})"),
+                        format!(
+                            "floor exhausted: retrying the excluded stair ends once ({reason})"
+                        ),
                     ),
                     None if active.is_none() => {
                         self.decide(
