@@ -78,9 +78,6 @@ pub struct NavLevel {
 pub(crate) struct Levels {
     levels: Vec<NavLevel>,
     span_level: Vec<u32>,
-    /// Spans whose height bin belongs to a level (not a stair step or
-    /// landing between floors).
-    on_floor: Vec<bool>,
 }
 
 /// Per height bin: area, sum of area x height, min and max height.
@@ -189,13 +186,11 @@ fn compute(nav: &NavMesh) -> Levels {
     let mut span_level = vec![NONE; n];
     let mut dist = vec![u32::MAX; n];
     let mut queue = VecDeque::new();
-    let mut on_floor = vec![false; n];
     for (s, sp) in nav.spans().iter().enumerate() {
         let z = f64::from(sp.floor);
         if let Some(b) = bins.get(&bin_of(z))
             && b.level != NONE
         {
-            on_floor[s] = true;
             span_level[s] = rank[b.level as usize];
             dist[s] = 0;
             queue.push_back(s);
@@ -228,11 +223,7 @@ fn compute(nav: &NavMesh) -> Levels {
                 .unwrap_or(0) as u32;
         }
     }
-    Levels {
-        levels,
-        span_level,
-        on_floor,
-    }
+    Levels { levels, span_level }
 }
 
 impl NavMesh {
@@ -261,21 +252,6 @@ impl NavMesh {
             .get(s as usize)
             .filter(|&&l| l != NONE)
             .map(|&l| l as usize)
-    }
-
-    /// Whether span `s` lies on a floor: its height is within a level's
-    /// height window (step 2 of the [`crate::levels`] definition), so it is
-    /// not a stair step or a landing between floors. `false` for an
-    /// unknown span.
-    ///
-    /// # Complexity
-    /// O(1) once the levels are computed.
-    pub fn is_on_level_floor(&self, s: SpanId) -> bool {
-        self.level_data()
-            .on_floor
-            .get(s as usize)
-            .copied()
-            .unwrap_or(false)
     }
 
     /// The level of the span under `p` (nearest span within

@@ -14,9 +14,10 @@
 //!    without view points are dropped, as in Habitat.
 //! 3. **Starts** are navigable poses drawn uniformly over the walkable area
 //!    of the floor islands (every span has the same area; islands on
-//!    furniture are excluded), on a floor
-//!    ([`crate::NavMesh::is_on_level_floor`]: never on a stair step or a
-//!    landing between floors), whose geodesic distance to the nearest
+//!    furniture are excluded) connected to a view point over areas at
+//!    least three cells wide ([`crate::NavMesh::wide_spans`]: the agent's
+//!    0.25 m moves at 30-degree headings cannot follow narrower strips),
+//!    whose geodesic distance to the nearest
 //!    view point lies in [1, 30] m. Episodes whose geodesic/euclidean ratio is
 //!    below 1.1 are kept only with probability 20 (r - 0.98)^2, habitat-lab's
 //!    filter against trivial straight-line episodes. The start heading is
@@ -229,15 +230,14 @@ pub fn generate_episodes(
     let nav = sim.nav();
     let scene = sim.scene();
     let mut episodes = Vec::new();
-    // Starts are drawn from the spans of floor islands (never on furniture)
-    // that lie on a floor (never on a stair step or a landing between
-    // floors, where no floor of the building is under the robot).
+    // Starts are drawn from the spans of floor islands (never on furniture).
     let floor_spans: Vec<u32> = (0..nav.span_count() as u32)
-        .filter(|&s| nav.is_floor_span(s) && nav.is_on_level_floor(s))
+        .filter(|&s| nav.is_floor_span(s))
         .collect();
     if floor_spans.is_empty() {
         return Ok(episodes);
     }
+    let wide_spans = nav.wide_spans();
     for category in &config.categories {
         let goals: Vec<ObjectGoal> = scene
             .objects_of(category)
@@ -261,6 +261,14 @@ pub fn generate_episodes(
                 nav.geodesic_field(&g.view_points.iter().map(|v| v.position).collect::<Vec<_>>())
             })
             .collect::<Result<_, _>>()?;
+        // The agent's 0.25 m moves at 30-degree headings cannot follow
+        // strips narrower than three cells: a start must reach a view point
+        // over wide spans (the oracle's field).
+        let all_view_points: Vec<Point3<f64>> = goals
+            .iter()
+            .flat_map(|g| g.view_points.iter().map(|v| v.position))
+            .collect();
+        let wide = nav.geodesic_field_within(&all_view_points, &wide_spans)?;
         let seed = category
             .bytes()
             .fold(config.seed, |h, b| h.rotate_left(7) ^ u64::from(b))
@@ -281,7 +289,9 @@ pub fn generate_episodes(
                 .map(|(i, f)| (i, f.span_distance(s)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .unwrap_or((0, f64::INFINITY));
-            if !(d >= config.min_geodesic && d <= config.max_geodesic) {
+            if !(d >= config.min_geodesic && d <= config.max_geodesic)
+                || !wide.span_distance(s).is_finite()
+            {
                 continue;
             }
             let closest = &goals[gi];
