@@ -289,9 +289,8 @@ pub fn generate_episodes(
                 .map(|(i, f)| (i, f.span_distance(s)))
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .unwrap_or((0, f64::INFINITY));
-            if !(d >= config.min_geodesic && d <= config.max_geodesic)
-                || !wide.span_distance(s).is_finite()
-            {
+            let in_range = d >= config.min_geodesic && d <= config.max_geodesic;
+            if !(in_range && wide.span_distance(s).is_finite()) {
                 continue;
             }
             let closest = &goals[gi];
