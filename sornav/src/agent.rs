@@ -269,6 +269,7 @@ fn region_context(
     objects: &[ObjectSummary],
     excluded: &BTreeSet<FrontierId>,
     floors: &dyn Fn(LevelId) -> i32,
+    unexplored_floors: &[UnexploredFloor],
 ) -> RegionContext {
     let local_context = cg
         .robot_context(objects)
@@ -302,11 +303,70 @@ fn region_context(
                 waypoint: node.viewpoint3(),
             })
         })
+        .chain(
+            unexplored_floors
+                .iter()
+                .enumerate()
+                .map(|(i, f)| ClusterCandidate {
+                    candidate: Candidate {
+                        cluster_id: FLOOR_CANDIDATE_BASE + i as u64,
+                        distance_m: f.cost,
+                        context: Vec::new(),
+                        floor: f.floor,
+                    },
+                    // Always among the top K: a floor is not ranked against
+                    // regions by geometry.
+                    u_geo: f64::MAX,
+                    waypoint: f.waypoint,
+                }),
+        )
         .collect();
     RegionContext {
         local_context,
         clusters,
     }
+}
+
+/// Supervisor candidate ids at and above this are unexplored floors (the
+/// index into the step's [`UnexploredFloor`] list), below it clusters.
+const FLOOR_CANDIDATE_BASE: u64 = 1 << 40;
+
+/// "An unexplored floor reached by these stairs": a reachable stair
+/// frontier leading off the robot's floor.
+#[derive(Debug, Clone, Copy)]
+struct UnexploredFloor {
+    frontier: FrontierId,
+    /// +1 up, -1 down.
+    floor: i32,
+    cost: f64,
+    waypoint: Point3<f64>,
+}
+
+/// The reachable, non-excluded stair frontiers of `graph` that leave the
+/// robot's floor (at least half a storey's step away in height).
+fn unexplored_floors(
+    graph: &FrontierGraph,
+    excluded: &BTreeSet<FrontierId>,
+    is_stair: &dyn Fn(FrontierId) -> bool,
+    robot_z: f64,
+) -> Vec<UnexploredFloor> {
+    graph
+        .nodes()
+        .filter(|n| is_stair(n.id) && !excluded.contains(&n.id))
+        .filter_map(|n| {
+            let dz = n.z - robot_z;
+            if dz.abs() < 0.3 {
+                return None;
+            }
+            let cost = graph.cost(NodeId::Robot, NodeId::Frontier(n.id))?;
+            Some(UnexploredFloor {
+                frontier: n.id,
+                floor: if dz > 0.0 { 1 } else { -1 },
+                cost,
+                waypoint: n.viewpoint3(),
+            })
+        })
+        .collect()
 }
 
 impl Agent {
@@ -970,8 +1030,11 @@ impl Agent {
         };
         let excluded = &self.excluded;
         let floors = |l: LevelId| relative_floor(&levels, l, z);
+        let frontiers = &self.frontiers;
+        let new_floors =
+            unexplored_floors(graph, excluded, &|id| frontiers.is_stair_frontier(id), z);
         let command = self.supervisor.step(now, &input, || {
-            region_context(&cg, graph, &objects, excluded, &floors)
+            region_context(&cg, graph, &objects, excluded, &floors, &new_floors)
         })?;
 
         // 5. Decision -> mission -> command.
@@ -984,6 +1047,21 @@ impl Agent {
             _ => None,
         };
         let relocation = match &command {
+            SupervisorCommand::Relocate { cluster_id, .. }
+                if *cluster_id >= FLOOR_CANDIDATE_BASE =>
+            {
+                usize::try_from(*cluster_id - FLOOR_CANDIDATE_BASE)
+                    .ok()
+                    .and_then(|i| new_floors.get(i))
+                    .map(|f| {
+                        (
+                            vec![f.frontier],
+                            f.frontier,
+                            f.waypoint,
+                            robot_path(graph, f.frontier).unwrap_or_default(),
+                        )
+                    })
+            }
             SupervisorCommand::Relocate { cluster_id, .. } => {
                 usize::try_from(*cluster_id).ok().and_then(|k| {
                     let cluster = cg.cluster(sornav_cluster_graph::ClusterId(k))?;

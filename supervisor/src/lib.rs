@@ -88,7 +88,9 @@ mod prior;
 mod supervisor;
 
 pub use clock::Timestamp;
-pub use commonsense::{CommonsenseConfig, CommonsensePolicy, ConflictAssessment};
+pub use commonsense::{
+    CommonsenseConfig, CommonsensePolicy, ConflictAssessment, REGIONS_PER_FLOOR,
+};
 pub use context::{Candidate, CandidateObject, ContextObject, RegionSnapshot};
 pub use error::SupervisorError;
 pub use evaluation::{TargetAuc, evaluate_prior, roc_auc};

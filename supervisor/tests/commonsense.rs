@@ -145,6 +145,35 @@ fn conflict_without_a_better_candidate_keeps_exploring() {
 }
 
 #[test]
+fn an_unexplored_floor_holds_several_regions() {
+    let mut p = CommonsensePolicy::default();
+    let floor_up = Candidate {
+        floor: 1,
+        ..cand(2, 6.0, &[])
+    };
+    let s = snap(
+        "sofa",
+        &["toilet", "sink", "bathtub"],
+        vec![cand(1, 3.0, &[]), floor_up],
+    );
+    assert!(p.assess(&s).conflict, "{}", p.assess(&s).reason);
+    let d = p.decide(&s, &NOW);
+    assert_eq!(
+        d.action,
+        PolicyAction::RelocateCluster { cluster_id: 2 },
+        "{}",
+        d.reason
+    );
+    // 1 - (1 - b)^5.67 for the sofa's base rate b, not b itself.
+    let b = sornav_supervisor::CooccurrencePrior::embedded()
+        .posterior("sofa", std::iter::empty::<&str>())
+        .unwrap()
+        .base_rate;
+    let want = 1.0 - (1.0 - b).powf(sornav_supervisor::REGIONS_PER_FLOOR);
+    assert!(d.reason.contains(&format!("{want:.3}")), "{}", d.reason);
+}
+
+#[test]
 fn distance_discount_prefers_the_near_equivalent_candidate() {
     let mut p = CommonsensePolicy::default();
     let s = snap(
