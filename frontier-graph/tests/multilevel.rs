@@ -382,16 +382,7 @@ struct StairReference {
     by_col: HashMap<(i32, i32), Vec<usize>>,
 }
 
-const DIRS8: [(i32, i32); 8] = [
-    (1, 0),
-    (-1, 0),
-    (0, 1),
-    (0, -1),
-    (1, 1),
-    (1, -1),
-    (-1, 1),
-    (-1, -1),
-];
+use common::DIRS as DIRS8;
 
 impl StairReference {
     /// Reads every surface column of `map` over the scene's extent through

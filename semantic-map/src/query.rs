@@ -176,14 +176,20 @@ mod tests {
     use super::*;
     use crate::{LabelSet, LabeledPoint, MapConfig};
 
-    #[test]
-    fn non_finite_radius_and_point_follow_the_documented_rule() {
+    /// A map with one cluster of three points near (1.075, 1.025, 0.525).
+    fn one_cluster_map() -> SemanticMap {
         let mut map = SemanticMap::new(MapConfig::default(), LabelSet::household()).unwrap();
         let pts: Vec<_> = (0..3)
             .map(|i| LabeledPoint::new(1.025 + 0.05 * i as f32, 1.025, 0.525, LabelId(10)))
             .collect();
         map.integrate_points(&Point3::origin(), &pts).unwrap();
         map.update_clusters();
+        map
+    }
+
+    #[test]
+    fn non_finite_radius_and_point_follow_the_documented_rule() {
+        let map = one_cluster_map();
         assert_eq!(map.cluster_count(), 1);
         let o = Point3::origin();
         assert_eq!(map.clusters_within(o, f64::NAN).count(), 0);
@@ -197,12 +203,7 @@ mod tests {
 
     #[test]
     fn height_bands_are_half_open_and_nan_matches_nothing() {
-        let mut map = SemanticMap::new(MapConfig::default(), LabelSet::household()).unwrap();
-        let pts: Vec<_> = (0..3)
-            .map(|i| LabeledPoint::new(1.025 + 0.05 * i as f32, 1.025, 0.525, LabelId(10)))
-            .collect();
-        map.integrate_points(&Point3::origin(), &pts).unwrap();
-        map.update_clusters();
+        let map = one_cluster_map();
         let z = map.clusters().next().unwrap().centre.z;
         let count = |lo: f64, hi: f64| map.query(&ClusterQuery::default().heights(lo, hi)).len();
         assert_eq!(count(z, z + 1.0), 1); // lower bound included

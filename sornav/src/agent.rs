@@ -759,10 +759,17 @@ impl Agent {
     /// Once per target: when the floor is exhausted while stair ends of
     /// G_F are excluded (failed climbs, arrivals that showed nothing), they
     /// are made eligible again. Returns whether any was.
-    fn retry_stairs(&mut self, stairs: Vec<FrontierId>) -> bool {
+    fn retry_stairs(&mut self) -> bool {
         if self.stairs_retried {
             return false;
         }
+        let stairs: Vec<FrontierId> = self
+            .frontiers
+            .graph()
+            .nodes()
+            .map(|n| n.id)
+            .filter(|&id| self.frontiers.is_stair_frontier(id))
+            .collect();
         let mut any = false;
         for id in stairs {
             if self.excluded.remove(&id) {
@@ -1080,11 +1087,7 @@ impl Agent {
         if route.is_some() {
             self.last_placed = Some(pose.position);
         }
-        let graph_stairs: Vec<FrontierId> = graph
-            .nodes()
-            .map(|n| n.id)
-            .filter(|&id| self.frontiers.is_stair_frontier(id))
-            .collect();
+
         self.route = route;
         self.clusters = Some(cg);
         let result = match command {
@@ -1194,7 +1197,7 @@ impl Agent {
                             ),
                         }
                     }
-                    None if active.is_none() && self.retry_stairs(graph_stairs) => self.keep_going(
+                    None if active.is_none() && self.retry_stairs() => self.keep_going(
                         now,
                         step,
                         format!(

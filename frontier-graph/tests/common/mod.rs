@@ -44,7 +44,8 @@ impl World {
     }
 }
 
-const DIRS: [(i32, i32); 8] = [
+/// The 8 neighbour offsets.
+pub const DIRS: [(i32, i32); 8] = [
     (1, 0),
     (-1, 0),
     (0, 1),
