@@ -9,6 +9,7 @@ use std::time::{Duration, Instant};
 use nalgebra::{Point3, Vector3};
 use sornav::frontier_graph::{FrontierError, FrontierMapConfig, MultiLevelMap};
 use sornav::semantic_map::{PinholeCamera, optical_pose};
+use sornav::{AgentConfig, occupancy_stride};
 use sornav_platform_sim::{
     Camera, CameraConfig, CameraPose, Frame, NavMesh, NavMeshConfig, RenderError, Scene,
 };
@@ -41,6 +42,9 @@ pub struct Walker {
     camera: Camera,
     pinhole: PinholeCamera,
     mount: f64,
+    /// Pixel stride of the points fed to the map: the agent's (at most
+    /// `AgentConfig::occupancy_max_columns` columns, same stride in rows).
+    stride: usize,
     /// The map being built.
     pub map: MultiLevelMap,
     /// Frames integrated so far.
@@ -53,7 +57,9 @@ pub struct Walker {
 
 impl Walker {
     /// A walker with a `width` x `height` camera (Habitat's HFOV and mount
-    /// height) and an empty map with `config`.
+    /// height) and an empty map with `config`; frames reach the map
+    /// subsampled as the agent subsamples them (every 4th pixel in each
+    /// direction at 640x480, every pixel at 160x120).
     ///
     /// # Errors
     /// The camera's and the map's construction errors, as strings.
@@ -75,6 +81,7 @@ impl Walker {
                 .map_err(|e: RenderError| e.to_string())?,
             pinhole,
             mount,
+            stride: occupancy_stride(1, width, AgentConfig::default().occupancy_max_columns),
             map: MultiLevelMap::new(config).map_err(|e| e.to_string())?,
             frames: 0,
             update_times: Vec::new(),
@@ -98,7 +105,7 @@ impl Walker {
             },
             0,
         );
-        let mut pts = points(&self.pinhole, &frame, &eye, yaw, 1);
+        let mut pts = points(&self.pinhole, &frame, &eye, yaw, self.stride);
         for i in -3..=3 {
             for j in -3..=3 {
                 let (dx, dy) = (0.05 * f64::from(i), 0.05 * f64::from(j));
@@ -129,11 +136,20 @@ impl Walker {
         Ok(())
     }
 
-    /// Walks `path` in 0.25 m steps, looking along it.
+    /// Walks `path` in steps of `step` metres along its length (0.25 is
+    /// the simulator's forward step), looking along the path, with a last
+    /// look at its end.
     ///
     /// # Errors
     /// The map's errors.
-    pub fn walk(&mut self, path: &[Point3<f64>]) -> Result<(), FrontierError> {
+    pub fn walk(&mut self, path: &[Point3<f64>], step: f64) -> Result<(), FrontierError> {
+        let step = if step.is_finite() && step > 1e-3 {
+            step
+        } else {
+            0.25
+        };
+        let mut since = 0.0;
+        let mut last = None;
         for w in path.windows(2) {
             let d = w[1] - w[0];
             let len = d.xy().norm();
@@ -141,11 +157,18 @@ impl Walker {
                 continue;
             }
             let yaw = d.y.atan2(d.x);
-            let n = (len / 0.25).ceil() as usize;
-            for i in 1..=n {
-                let p = w[0] + d * (i as f64 / n as f64);
-                self.look(&p, yaw)?;
+            let mut s = step - since;
+            while s <= len {
+                self.look(&(w[0] + d * (s / len)), yaw)?;
+                s += step;
             }
+            since = len - (s - step);
+            last = Some((w[1], yaw));
+        }
+        if let Some((end, yaw)) = last
+            && since > 1e-6
+        {
+            self.look(&end, yaw)?;
         }
         Ok(())
     }
@@ -170,7 +193,8 @@ pub fn level_corner(scene: &Scene, level: usize) -> Result<Option<(NavMesh, Poin
 }
 
 /// Walks from the corner of level `from` to the corner of level `to` along
-/// the navmesh's shortest path, turning around at both ends.
+/// the navmesh's shortest path in 5 cm steps (dense: a stair is seen from
+/// every tread), turning around at both ends.
 ///
 /// # Errors
 /// Construction, path and map errors, as strings.
@@ -192,7 +216,7 @@ pub fn walk_between(
     let mut walker = Walker::new(scene, width, height, FrontierMapConfig::default())?;
     let e = |e: FrontierError| e.to_string();
     walker.turn_around(&a).map_err(e)?;
-    walker.walk(&path).map_err(e)?;
+    walker.walk(&path, 0.05).map_err(e)?;
     walker.turn_around(&b).map_err(e)?;
     Ok(walker)
 }

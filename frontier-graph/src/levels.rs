@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cell::cell_of;
 use crate::graph::pair;
-use crate::stairs::{Params, Stair, extract};
+use crate::stairs::{OffLevelColumns, Params, Stair, extract};
 use crate::surface::SurfaceMap;
 use crate::{
     AnchorNode, Cell, CellState, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMap,
@@ -234,6 +234,10 @@ pub struct MultiLevelMap {
     cfg: FrontierMapConfig,
     maps: Vec<FrontierMap>,
     surfaces: SurfaceMap,
+    /// The surface columns stair extraction starts from (a cache; a
+    /// restored map recomputes it at its first extraction).
+    #[serde(skip)]
+    off_level: OffLevelColumns,
     stairs: Vec<Stair>,
     /// Portal ids by (level, cell); rebuilt lazily (a restored map gives
     /// its portals new ids, which only costs one refresh of their rows).
@@ -261,6 +265,7 @@ impl MultiLevelMap {
             surfaces: SurfaceMap::new(cfg.levels.surface_resolution),
             cfg,
             maps: Vec::new(),
+            off_level: OffLevelColumns::default(),
             stairs: Vec::new(),
             portal_ids: BTreeMap::new(),
             next_portal: 0,
@@ -567,6 +572,7 @@ impl MultiLevelMap {
             m.rebuild();
         }
         self.surfaces.mark_dirty();
+        self.off_level.invalidate();
     }
 
     /// Re-extracts the stairs when the surfaces changed; creates the levels
@@ -587,13 +593,17 @@ impl MultiLevelMap {
             min_stair_rise: lc.min_stair_rise,
         };
         let floors: Vec<f64> = self.levels().map(|l| l.floor_z).collect();
-        let mut found = extract(&self.surfaces, &floors, &params);
+        let touched = self.surfaces.take_touched();
+        self.off_level
+            .update(&self.surfaces, &touched, &floors, &params);
+        let mut found = extract(&self.surfaces, &self.off_level, &floors, &params);
         if !found.new_levels.is_empty() && self.cfg.levels.allow_stairs {
             for h in found.new_levels.clone() {
                 self.add_level(h)?;
             }
             let floors: Vec<f64> = self.levels().map(|l| l.floor_z).collect();
-            found = extract(&self.surfaces, &floors, &params);
+            self.off_level.update(&self.surfaces, &[], &floors, &params);
+            found = extract(&self.surfaces, &self.off_level, &floors, &params);
         }
         self.stairs = found.stairs;
         Ok(())

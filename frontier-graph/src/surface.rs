@@ -55,9 +55,19 @@ pub(crate) struct Interval {
 }
 
 /// The intervals of one column, sorted by height.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub(crate) struct Column {
     pub intervals: Vec<Interval>,
+    /// Listed in [`SurfaceMap::touched`] since the last
+    /// [`SurfaceMap::take_touched`] (bookkeeping, not compared).
+    #[serde(skip)]
+    touched: bool,
+}
+
+impl PartialEq for Column {
+    fn eq(&self, other: &Self) -> bool {
+        self.intervals == other.intervals
+    }
 }
 
 impl Column {
@@ -125,6 +135,10 @@ pub(crate) struct SurfaceMap {
     /// Columns changed since the last [`SurfaceMap::take_dirty`].
     #[serde(skip)]
     dirty: bool,
+    /// Columns that received returns since the last
+    /// [`take_touched`](Self::take_touched), each once.
+    #[serde(skip)]
+    touched: Vec<ColumnKey>,
 }
 
 impl SurfaceMap {
@@ -133,6 +147,7 @@ impl SurfaceMap {
             resolution,
             columns: FxHashMap::default(),
             dirty: false,
+            touched: Vec::new(),
         }
     }
 
@@ -173,7 +188,12 @@ impl SurfaceMap {
             #[allow(clippy::cast_possible_truncation)]
             let z = p.z as f32;
             let above = origin.z > p.z + ABOVE;
-            self.columns.entry(k).or_default().insert(z, above);
+            let c = self.columns.entry(k).or_default();
+            c.insert(z, above);
+            if !c.touched {
+                c.touched = true;
+                self.touched.push(k);
+            }
             self.dirty = true;
         }
     }
@@ -186,6 +206,17 @@ impl SurfaceMap {
     /// Whether anything changed since the last call.
     pub(crate) fn take_dirty(&mut self) -> bool {
         std::mem::take(&mut self.dirty)
+    }
+
+    /// The columns that received returns since the last call, each once.
+    pub(crate) fn take_touched(&mut self) -> Vec<ColumnKey> {
+        let touched = std::mem::take(&mut self.touched);
+        for k in &touched {
+            if let Some(c) = self.columns.get_mut(k) {
+                c.touched = false;
+            }
+        }
+        touched
     }
 
     /// Walkable surface heights of column `k`.

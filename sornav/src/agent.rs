@@ -183,6 +183,26 @@ impl std::fmt::Debug for Agent {
     }
 }
 
+/// What the planning phase of [`Agent::step`] produced.
+struct Planning {
+    objects: Vec<ObjectSummary>,
+    category: String,
+    levels: BTreeMap<LevelId, f64>,
+    clusters: ClusterGraph<FrontierId>,
+    route: Option<Route>,
+}
+
+/// Where a relocation goes: the cluster's frontiers, the frontier whose
+/// viewpoint is the waypoint, the waypoint and the robot's path to it.
+type RelocationTarget = (Vec<FrontierId>, FrontierId, Point3<f64>, Vec<Point3<f64>>);
+
+/// The supervisor's command with the missions it would start.
+struct Decided {
+    command: SupervisorCommand,
+    explore: Option<Mission>,
+    relocation: Option<RelocationTarget>,
+}
+
 fn build_policy(config: &PolicyConfig) -> Result<BoxedPolicy, AgentError> {
     Ok(match config {
         PolicyConfig::Commonsense(c) => Box::new(CommonsensePolicy::embedded(c.clone())?),
@@ -912,6 +932,27 @@ impl Agent {
     /// frontiers (see those crates), plus `O(n^2)` for G_C and `O(n M)` for
     /// the contexts of `M` objects.
     pub fn step(&mut self, now: Duration) -> Result<AgentCommand, AgentError> {
+        let pose = self.begin_step(now)?;
+        // 1. Mission monitoring.
+        self.executor.tick(&pose, &AlwaysValid)?;
+        self.process_events();
+        // 2. Target gate first.
+        let gate_command = match self.gate_phase(now) {
+            Ok(command) => command,
+            Err(command) => return Ok(command),
+        };
+        // 3. G_F, G_C and the route.
+        let planning = self.planning_phase(&pose)?;
+        // 4. Algorithm 1.
+        let decided = self.supervision_phase(now, &pose, gate_command, &planning)?;
+        self.route = planning.route;
+        self.clusters = Some(planning.clusters);
+        // 5. Decision -> mission -> command.
+        self.action_phase(now, &pose, decided)
+    }
+
+    /// Checks the call and advances the clock; the pose to decide from.
+    fn begin_step(&mut self, now: Duration) -> Result<RobotPose, AgentError> {
         if self.target.is_none() {
             return Err(AgentError::NoTarget);
         }
@@ -927,11 +968,13 @@ impl Agent {
         self.stats.steps += 1;
         self.executor.clock_mut().0 = now;
 
-        // 1. Mission monitoring.
-        self.executor.tick(&pose, &AlwaysValid)?;
-        self.process_events();
+        Ok(pose)
+    }
 
-        // 2. Target gate first.
+    /// Phase 2 of [`step`](Self::step): follows the target gate. `Err`
+    /// carries the command that ends the step (stop at a confirmed target,
+    /// verify a candidate); `Ok` the gate's command for the supervisor.
+    fn gate_phase(&mut self, now: Duration) -> Result<GateCommand, AgentCommand> {
         let gate_command = self
             .target
             .as_ref()
@@ -956,7 +999,7 @@ impl Agent {
                         object.0
                     ),
                 );
-                return Ok(AgentCommand::Stop { object, centre });
+                return Err(AgentCommand::Stop { object, centre });
             }
             GateCommand::Verify { object, centre } => {
                 self.decide(
@@ -966,16 +1009,19 @@ impl Agent {
                     None,
                     format!("arrived at candidate {}: face it and observe", object.0),
                 );
-                return Ok(AgentCommand::Verify {
+                return Err(AgentCommand::Verify {
                     object,
                     look_at: centre,
                 });
             }
             GateCommand::Search | GateCommand::NavToObject { .. } => {}
         }
+        Ok(gate_command)
+    }
 
-        // 3. G_F, G_C and the route.
-        let z = pose.position.z;
+    /// Phase 3 of [`step`](Self::step): brings G_F up to date for the
+    /// pose, builds G_C and plans the exploration route.
+    fn planning_phase(&mut self, pose: &RobotPose) -> Result<Planning, AgentError> {
         let objects = self.object_summaries();
         let category = self
             .target
@@ -1014,7 +1060,34 @@ impl Agent {
             &mut self.plan,
         )?;
 
-        // 4. Algorithm 1.
+        Ok(Planning {
+            objects,
+            category,
+            levels,
+            clusters: cg,
+            route,
+        })
+    }
+
+    /// Phase 4 of [`step`](Self::step): the supervisor's Algorithm 1 over
+    /// the planned route and the region contexts, with the mission each
+    /// command would start.
+    fn supervision_phase(
+        &mut self,
+        now: Duration,
+        pose: &RobotPose,
+        gate_command: GateCommand,
+        planning: &Planning,
+    ) -> Result<Decided, AgentError> {
+        let Planning {
+            objects,
+            category,
+            levels,
+            clusters: cg,
+            route,
+        } = planning;
+        let z = pose.position.z;
+        let graph = self.frontiers.graph();
         let mission = match self.executor.active() {
             Some((id, m)) => MissionState {
                 id: id.0,
@@ -1030,22 +1103,20 @@ impl Agent {
             _ => None,
         };
         let input = StepInput {
-            target: &category,
+            target: category,
             target_accepted,
             mission,
             first_frontier: route.as_ref().map(|r| r.first_viewpoint),
         };
         let excluded = &self.excluded;
-        let floors = |l: LevelId| relative_floor(&levels, l, z);
+        let floors = |l: LevelId| relative_floor(levels, l, z);
         let frontiers = &self.frontiers;
         let new_floors =
             unexplored_floors(graph, excluded, &|id| frontiers.is_stair_frontier(id), z);
         let command = self.supervisor.step(now, &input, || {
-            region_context(&cg, graph, &objects, excluded, &floors, &new_floors)
+            region_context(cg, graph, objects, excluded, &floors, &new_floors)
         })?;
 
-        // 5. Decision -> mission -> command.
-        let active = self.executor.active().map(|(id, m)| (id, m.kind));
         let explore = match (&command, &route) {
             (
                 SupervisorCommand::Explore { .. } | SupervisorCommand::ExploreNewRegion { .. },
@@ -1088,8 +1159,28 @@ impl Agent {
             self.last_placed = Some(pose.position);
         }
 
-        self.route = route;
-        self.clusters = Some(cg);
+        Ok(Decided {
+            command,
+            explore,
+            relocation,
+        })
+    }
+
+    /// Phase 5 of [`step`](Self::step): the supervisor's command becomes a
+    /// mission for the executor (whose pre-emption rules apply) and a
+    /// command for the platform.
+    fn action_phase(
+        &mut self,
+        now: Duration,
+        pose: &RobotPose,
+        decided: Decided,
+    ) -> Result<AgentCommand, AgentError> {
+        let Decided {
+            command,
+            explore,
+            relocation,
+        } = decided;
+        let active = self.executor.active().map(|(id, m)| (id, m.kind));
         let result = match command {
             SupervisorCommand::NavToObject { target_id } => {
                 let object = ExecObjectId(target_id);
@@ -1100,7 +1191,7 @@ impl Agent {
                         format!("approaching candidate {target_id}"),
                     )
                 } else {
-                    self.dispatch_approach(now, target_id, &pose)?
+                    self.dispatch_approach(now, target_id, pose)?
                 }
             }
             SupervisorCommand::KeepRelocation => {

@@ -113,6 +113,12 @@ pub struct ProceduralConfig {
     /// has at least two rooms downstairs and one on every upper floor). The default, 20,
     /// leaves HM3D's room counts uncapped.
     pub max_rooms_per_floor: u32,
+    /// Footprint of every floor, `[width (x), depth (y)]` in m; `None` (the
+    /// default) derives it from the imitated HM3D house's navigable area
+    /// (30 to 500 m^2 per floor, a random aspect ratio). Set it for
+    /// buildings of a given size, e.g. stress tests and benchmarks; each side
+    /// must be in [6, 200] m and is still widened to fit the stairwell.
+    pub footprint: Option<[f64; 2]>,
 }
 
 impl Default for ProceduralConfig {
@@ -127,6 +133,7 @@ impl Default for ProceduralConfig {
             door_height: 2.1,
             min_room_side: 2.4,
             max_rooms_per_floor: 20,
+            footprint: None,
         }
     }
 }
@@ -170,6 +177,12 @@ impl ProceduralConfig {
         }
         if !(1..=40).contains(&self.max_rooms_per_floor) {
             return bad("max_rooms_per_floor", "must be in [1, 40]");
+        }
+        if self
+            .footprint
+            .is_some_and(|f| !f.iter().all(|s| s.is_finite() && (6.0..=200.0).contains(s)))
+        {
+            return bad("footprint", "each side must be in [6, 200] m");
         }
         Ok(())
     }
@@ -914,6 +927,11 @@ pub fn generate_with_stats(
     let mut d = per_floor / w;
     if rng.random::<bool>() {
         std::mem::swap(&mut w, &mut d);
+    }
+    // a given footprint replaces the drawn one (the draws above still
+    // happen, so that the rest of the house follows the same seed)
+    if let Some([fw, fd]) = config.footprint {
+        (w, d) = (fw, fd);
     }
     let (w, d) = (
         w.max(if stairwell {
