@@ -571,3 +571,53 @@ impl Ord for Ordered {
 fn ordered(d: f64) -> Ordered {
     Ordered(d)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn params() -> Params {
+        Params {
+            step: 0.2,
+            clearance: 0.88,
+            radius: 0.18,
+            level_tolerance: 0.1,
+            min_level_separation: 1.5,
+            min_level_area: 2.0,
+            min_stair_rise: 0.5,
+        }
+    }
+
+    proptest! {
+        /// Updating the off-level columns from the touched columns after
+        /// every batch of returns gives the set a scan of every column
+        /// gives, for any returns and any change of the levels.
+        #[test]
+        fn incremental_off_level_columns_equal_a_full_scan(
+            batches in prop::collection::vec(
+                prop::collection::vec((0.0f64..3.0, 0.0f64..3.0, -0.2f64..3.0), 1..60),
+                1..8,
+            ),
+            level_change in 0usize..8,
+        ) {
+            let p = params();
+            let mut map = SurfaceMap::new(0.1);
+            let mut cached = OffLevelColumns::default();
+            let mut levels = vec![0.0];
+            for (k, batch) in batches.iter().enumerate() {
+                if k == level_change {
+                    levels.push(1.3);
+                }
+                let points: Vec<Point3<f64>> =
+                    batch.iter().map(|&(x, y, z)| Point3::new(x, y, z)).collect();
+                map.integrate(&Point3::new(1.5, 1.5, 4.0), &points, 10.0);
+                let touched = map.take_touched();
+                cached.update(&map, &touched, &levels, &p);
+                let mut full = OffLevelColumns::default();
+                full.update(&map, &[], &levels, &p);
+                prop_assert_eq!(&cached.cols, &full.cols);
+            }
+        }
+    }
+}

@@ -196,3 +196,42 @@ proptest! {
         prop_assert!(Scene::procedural(seed, &cfg).unwrap() == Scene::procedural(seed, &cfg).unwrap());
     }
 }
+
+#[test]
+fn a_given_footprint_sets_the_house_size_and_bad_ones_are_rejected() {
+    for (floors, side) in [(1, 12.0), (2, 30.0)] {
+        let cfg = ProceduralConfig {
+            floors: Some(floors),
+            footprint: Some([side, side * 0.75]),
+            ..Default::default()
+        };
+        let scene = Scene::procedural(5, &cfg).unwrap();
+        let b = scene.bounds();
+        // the walls' thickness sticks out by at most one wall
+        assert!(
+            ((b.max.x - b.min.x) - side).abs() <= 0.2,
+            "width {} for {side}",
+            b.max.x - b.min.x
+        );
+        assert!(
+            ((b.max.y - b.min.y) - side * 0.75).abs() <= 0.2,
+            "depth {} for {}",
+            b.max.y - b.min.y,
+            side * 0.75
+        );
+        assert_eq!(scene.levels().len(), floors as usize);
+    }
+    for bad in [[5.0, 10.0], [10.0, 201.0], [f64::NAN, 10.0], [10.0, f64::INFINITY]] {
+        let cfg = ProceduralConfig {
+            footprint: Some(bad),
+            ..Default::default()
+        };
+        assert!(
+            matches!(
+                Scene::procedural(1, &cfg),
+                Err(sornav_platform_sim::SceneError::Config { field: "footprint", .. })
+            ),
+            "{bad:?} accepted"
+        );
+    }
+}
