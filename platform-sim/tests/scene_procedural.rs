@@ -221,7 +221,12 @@ fn a_given_footprint_sets_the_house_size_and_bad_ones_are_rejected() {
         );
         assert_eq!(scene.levels().len(), floors as usize);
     }
-    for bad in [[5.0, 10.0], [10.0, 201.0], [f64::NAN, 10.0], [10.0, f64::INFINITY]] {
+    for bad in [
+        [5.0, 10.0],
+        [10.0, 201.0],
+        [f64::NAN, 10.0],
+        [10.0, f64::INFINITY],
+    ] {
         let cfg = ProceduralConfig {
             footprint: Some(bad),
             ..Default::default()
@@ -229,7 +234,10 @@ fn a_given_footprint_sets_the_house_size_and_bad_ones_are_rejected() {
         assert!(
             matches!(
                 Scene::procedural(1, &cfg),
-                Err(sornav_platform_sim::SceneError::Config { field: "footprint", .. })
+                Err(sornav_platform_sim::SceneError::Config {
+                    field: "footprint",
+                    ..
+                })
             ),
             "{bad:?} accepted"
         );
