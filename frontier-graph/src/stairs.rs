@@ -39,7 +39,7 @@
 //! # Complexity
 //! Run when the surface map has changed: O(T log C) to bring the set of C
 //! off-level columns up to date for the T columns the updates touched
-//! ([`OffLevelColumns`]; O(mapped columns) when the levels changed), then
+//! (`OffLevelColumns`; O(mapped columns) when the levels changed), then
 //! O(S log S) for the S off-level surfaces (step 1 starts from them only;
 //! union-find and Dijkstra are near-linear) plus O(W r^2) for the
 //! footprint test of the W surfaces of attached components (r = robot
