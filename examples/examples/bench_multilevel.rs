@@ -151,34 +151,6 @@ fn main() -> Result<(), String> {
         .and_then(|s| s.parse().ok())
         .unwrap_or(if case == "30x30" { 1 } else { REPS })
         .max(1);
-    let planned: usize = legs
-        .iter()
-        .map(|l| {
-            l.windows(2)
-                .map(|w| (w[1] - w[0]).xy().norm())
-                .sum::<f64>()
-                .div_euclid(0.25) as usize
-                + 13
-        })
-        .sum::<usize>()
-        + 12;
-    eprintln!(
-        "{} stops, {} legs, about {planned} frames per tour",
-        stops.len(),
-        legs.len()
-    );
-    if std::env::var_os("SORNAV_BENCH_LEGS").is_some() {
-        for (l, s) in legs.iter().zip(&stops[1..]) {
-            let len: f64 = l.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
-            eprintln!(
-                "leg to ({:.1},{:.1},{:.1}): {} points, {len:.1} m",
-                s.x,
-                s.y,
-                s.z,
-                l.len()
-            );
-        }
-    }
     let progress = std::env::var_os("SORNAV_BENCH_PROGRESS").is_some();
     for _ in 0..reps {
         let mut w = Walker::new(

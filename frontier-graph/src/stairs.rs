@@ -197,8 +197,15 @@ impl OffLevelColumns {
         levels: &[f64],
         p: &Params,
     ) {
-        let key = (levels.to_vec(), p.level_tolerance, p.clearance);
-        if self.valid_for.as_ref() == Some(&key) {
+        let valid = self
+            .valid_for
+            .as_ref()
+            .is_some_and(|(l, tolerance, clearance)| {
+                l.as_slice() == levels
+                    && *tolerance == p.level_tolerance
+                    && *clearance == p.clearance
+            });
+        if valid {
             for &k in touched {
                 if has_off_level(map, k, levels, p) {
                     self.cols.insert(k);
@@ -213,7 +220,7 @@ impl OffLevelColumns {
                 .copied()
                 .filter(|&k| has_off_level(map, k, levels, p))
                 .collect();
-            self.valid_for = Some(key);
+            self.valid_for = Some((levels.to_vec(), p.level_tolerance, p.clearance));
         }
     }
 }
