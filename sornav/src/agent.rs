@@ -22,6 +22,7 @@ use sornav_target_gate::{CandidateReport, GateCommand, NeverVisible, ObjectId, T
 use sornav_tsp::HorizonPlan;
 
 use crate::approach::approach_waypoint;
+use crate::commitment;
 use crate::config::{AgentConfig, PolicyConfig};
 use crate::error::AgentError;
 use crate::observation::{Observation, ObservationReport, Sensor};
@@ -1033,20 +1034,30 @@ impl Agent {
         let levels: BTreeMap<LevelId, f64> =
             self.frontiers.levels().map(|l| (l.id, l.floor_z)).collect();
         let graph = self.frontiers.graph();
+        // The frontier being explored; when it changed (its cells were
+        // observed: a new id), its successor near its viewpoint.
+        let mut committed = None;
         if let Some((_, m)) = self.executor.active()
             && let MissionKind::Explore { frontier } = m.kind
-            && graph.frontier(FrontierId(frontier.0)).is_none()
         {
-            // The frontier was explored away: the mission is done.
-            self.executor.cancel();
-            for event in self.executor.drain_events() {
-                if let ExecutorEvent::Finished(outcome) = event {
-                    self.last_outcome = Some(outcome);
+            let id = FrontierId(frontier.0);
+            committed = if graph.frontier(id).is_some() {
+                Some(id)
+            } else {
+                commitment::successor(graph, &self.excluded, &m.waypoint, &self.config.commitment)
+            };
+            if committed.is_none() {
+                // The frontier was explored away: the mission is done.
+                self.executor.cancel();
+                for event in self.executor.drain_events() {
+                    if let ExecutorEvent::Finished(outcome) = event {
+                        self.last_outcome = Some(outcome);
+                    }
                 }
             }
         }
         let cg = ClusterGraph::build(graph, &self.config.cluster)?;
-        let route = ordering::choose(
+        let mut route = ordering::choose(
             &self.config.ordering,
             &self.config.horizon,
             &OrderingInput {
@@ -1059,6 +1070,22 @@ impl Agent {
             },
             &mut self.plan,
         )?;
+        if let Some(r) = route.as_mut() {
+            let first = commitment::committed_frontier(
+                graph,
+                &self.excluded,
+                r,
+                committed,
+                &self.config.commitment,
+            );
+            if first != r.first
+                && let Some(node) = graph.frontier(first)
+            {
+                r.first = first;
+                r.first_viewpoint = node.viewpoint3();
+                r.committed = true;
+            }
+        }
 
         Ok(Planning {
             objects,

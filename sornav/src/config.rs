@@ -13,6 +13,7 @@ use sornav_supervisor::{CommonsenseConfig, LlmConfig, SupervisorConfig};
 use sornav_target_gate::GateConfig;
 use sornav_tsp::RecedingHorizon;
 
+use crate::commitment::CommitmentConfig;
 use crate::error::ConfigError;
 
 /// One entry of the label vocabulary: a semantic-camera / LiDAR label id,
@@ -228,6 +229,9 @@ pub struct AgentConfig {
     pub executor: ExecutorConfig,
     /// Placement of `NAV_TO_OBJECT` waypoints.
     pub approach: ApproachConfig,
+    /// Commitment to the frontier being explored (hysteresis against a
+    /// route whose first frontier flips).
+    pub commitment: CommitmentConfig,
     /// Radius (m) of the disk around the robot's pose that every
     /// observation marks as free floor: the robot stands there, and a
     /// camera does not see the floor next to its base (default 0.18, the
@@ -257,6 +261,7 @@ impl Default for AgentConfig {
             policy: PolicyConfig::default(),
             executor: ExecutorConfig::default(),
             approach: ApproachConfig::default(),
+            commitment: CommitmentConfig::default(),
             footprint_free_radius_m: 0.18,
             occupancy_max_columns: 160,
         }
@@ -483,6 +488,12 @@ impl AgentConfig {
             return Err(component(
                 "approach",
                 "need standoff_m > 0, 0 <= min_standoff_m < standoff_m, sample_step_m > 0, at most 200 samples per axis, max_path_queries >= 1",
+            ));
+        }
+        if !self.commitment.is_valid() {
+            return Err(component(
+                "commitment",
+                "need finite, non-negative switch_margin_m, successor_radius_m and successor_height_m",
             ));
         }
         agree(

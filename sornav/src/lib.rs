@@ -103,6 +103,7 @@ struct ReadmeDoctests;
 
 mod agent;
 mod approach;
+mod commitment;
 mod config;
 mod error;
 mod observation;
@@ -112,6 +113,7 @@ mod snapshot;
 mod target;
 
 pub use agent::{Agent, AgentCommand, BoxedPolicy};
+pub use commitment::CommitmentConfig;
 pub use config::{
     AgentConfig, ApproachConfig, FrontierOrdering, LabelEntry, PolicyConfig, SemanticRankingConfig,
     Variant,

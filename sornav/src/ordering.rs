@@ -20,7 +20,8 @@ pub struct Route {
     pub ordering: String,
     /// Frontiers in visiting order (TSP), or by decreasing preference.
     pub order: Vec<FrontierId>,
-    /// The frontier to explore now.
+    /// The frontier to explore now: the ordering's first, or the frontier
+    /// being explored when the commitment kept it (`committed`).
     pub first: FrontierId,
     /// Its executable viewpoint (on the floor it stands on).
     pub first_viewpoint: Point3<f64>,
@@ -28,6 +29,11 @@ pub struct Route {
     pub replaced: bool,
     /// Route cost from the robot (TSP), or the first leg's cost.
     pub cost: f64,
+    /// Whether `first` is the frontier being explored (or its successor),
+    /// kept instead of the ordering's first by the commitment's hysteresis
+    /// ([`crate::CommitmentConfig`]).
+    #[serde(default)]
+    pub committed: bool,
 }
 
 /// A reachable, admissible frontier: id, viewpoint, centroid, robot cost.
@@ -137,6 +143,7 @@ fn tsp(
             first_viewpoint: first.viewpoint,
             replaced: p.replaced,
             cost: p.route_cost,
+            committed: false,
         })
     });
     *previous = plan;
@@ -159,6 +166,7 @@ fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
         first_viewpoint: best.viewpoint,
         replaced: false,
         cost: best.cost,
+        committed: false,
     })
 }
 
@@ -197,14 +205,14 @@ fn semantic(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use proptest::prelude::*;
     use sornav_frontier_graph::{FrontierMap, FrontierMapConfig};
 
     /// A 360-degree scan of a `2a x 2b` room centred on the robot whose
     /// walls are open in the angular `gaps` (rays there run beyond range).
-    fn room_graph(a: f64, b: f64, gaps: &[(f64, f64)]) -> FrontierMap {
+    pub(crate) fn room_graph(a: f64, b: f64, gaps: &[(f64, f64)]) -> FrontierMap {
         let mut map = FrontierMap::new(FrontierMapConfig::default()).unwrap();
         let origin = Point3::new(0.0, 0.0, 0.5);
         let mut points = Vec::new();
@@ -229,12 +237,12 @@ mod tests {
         map
     }
 
-    fn gaps() -> impl Strategy<Value = Vec<(f64, f64)>> {
+    pub(crate) fn gaps() -> impl Strategy<Value = Vec<(f64, f64)>> {
         proptest::collection::vec((0.0f64..6.0, 0.1f64..0.5), 1..5)
             .prop_map(|v| v.into_iter().map(|(lo, w)| (lo, lo + w)).collect())
     }
 
-    fn input<'a>(
+    pub(crate) fn input<'a>(
         graph: &'a FrontierGraph,
         excluded: &'a BTreeSet<FrontierId>,
         objects: &'a [ObjectSummary],
@@ -251,7 +259,7 @@ mod tests {
 
     /// Cost of visiting `order` (frontier ids) from the robot, with the
     /// agent's matrix rule (graph edge, else through the robot).
-    fn open_path_cost(graph: &FrontierGraph, order: &[FrontierId]) -> f64 {
+    pub(crate) fn open_path_cost(graph: &FrontierGraph, order: &[FrontierId]) -> f64 {
         let robot = |f: FrontierId| graph.cost(NodeId::Robot, NodeId::Frontier(f)).unwrap();
         let mut cost = robot(order[0]);
         for w in order.windows(2) {
