@@ -702,7 +702,23 @@ impl<F: AgentFactory> SornavPolicy<F> {
             }
             AgentCommand::Continue { mission: None } => {
                 self.drop_mission();
-                Action::TurnLeft
+                // Looking around between floors (on a stair or a landing the
+                // map does not place on a level): with the camera tilted
+                // down, the next flight's treads come into view (a level
+                // camera does not see a stair going down).
+                let between = self
+                    .agent
+                    .as_ref()
+                    .is_some_and(|a| a.current_level().is_none());
+                let want = if between { -self.tilt } else { 0.0 };
+                let half = self.tilt / 2.0;
+                if self.pitch > want + half {
+                    Action::LookDown
+                } else if self.pitch < want - half {
+                    Action::LookUp
+                } else {
+                    Action::TurnLeft
+                }
             }
             AgentCommand::Verify { look_at, .. } => {
                 self.drop_mission();

@@ -125,6 +125,15 @@ const STAIR_END_ARRIVALS: u32 = 3;
 /// pose with a reachable frontier when it is farther than this (m).
 const RETREAT_MIN_M: f64 = 0.3;
 
+/// Decisions spent looking around off a known floor with nothing reachable
+/// (two full turns at 30 degrees) before the robot walks back along its
+/// trail to the last floor it stood on.
+const LOOK_AROUND_LIMIT: u32 = 24;
+
+/// Spacing (m) of the trail's points and their largest number.
+const TRAIL_SPACING_M: f64 = 0.1;
+const TRAIL_MAX: usize = 10_000;
+
 /// How near (m, horizontally; vertically within a step) the robot must be
 /// to a stair end to count as standing at it.
 const STAIR_END_REACH: f64 = 0.4;
@@ -167,6 +176,15 @@ pub struct Agent {
     last_placed: Option<Point3<f64>>,
     /// The excluded stair ends were retried once (see `retry_stairs`).
     stairs_retried: bool,
+    /// The robot's positions since it last stood on a known floor (the
+    /// first is on that floor), every `TRAIL_SPACING_M`: the way back
+    /// from a stair or landing the map does not place.
+    trail: Vec<Point3<f64>>,
+    /// Consecutive decisions spent looking around off a known floor.
+    looking_around: u32,
+    /// The robot walked back along its trail since it last stood on a
+    /// known floor (a second time it is exhausted instead).
+    walked_back: bool,
     relocation: Option<RelocationRecord>,
     last_outcome: Option<MissionOutcome>,
     decisions: Vec<Decision>,
@@ -447,6 +465,9 @@ impl Agent {
             arrivals: BTreeMap::new(),
             last_placed: None,
             stairs_retried: false,
+            trail: Vec::new(),
+            looking_around: 0,
+            walked_back: false,
             relocation: None,
             last_outcome: None,
             decisions: Vec::new(),
@@ -968,6 +989,20 @@ impl Agent {
         self.last_step = Some(now);
         self.stats.steps += 1;
         self.executor.clock_mut().0 = now;
+        if self.current_level().is_some() {
+            self.trail.clear();
+            self.trail.push(pose.position);
+            self.looking_around = 0;
+            self.walked_back = false;
+        } else if !self.trail.is_empty()
+            && self.trail.len() < TRAIL_MAX
+            && self
+                .trail
+                .last()
+                .is_some_and(|p| (p - pose.position).norm() >= TRAIL_SPACING_M)
+        {
+            self.trail.push(pose.position);
+        }
 
         Ok(pose)
     }
@@ -1291,7 +1326,8 @@ impl Agent {
                         // exhausted. Go back to where the map last gave
                         // the robot somewhere to go; without such a place,
                         // look around until the map places the robot.
-                        match self.last_placed {
+                        let last_placed = self.last_placed;
+                        match last_placed {
                             Some(back) if (back - pose.position).norm() > RETREAT_MIN_M => {
                                 let mission = Mission::new(
                                     MissionKind::Relocate {
@@ -1308,11 +1344,20 @@ impl Agent {
                                     format!("no reachable frontier off a known floor: back to the last place with one ({reason})"),
                                 )?
                             }
-                            _ => self.keep_going(
+                            _ if self.retry_stairs() => self.keep_going(
                                 now,
                                 step,
-                                format!("no reachable frontier off a known floor; looking around ({reason})"),
+                                format!("no reachable frontier off a known floor: retrying the excluded stair ends once ({reason})"),
                             ),
+                            _ if self.looking_around < LOOK_AROUND_LIMIT => {
+                                self.looking_around += 1;
+                                self.keep_going(
+                                    now,
+                                    step,
+                                    format!("no reachable frontier off a known floor; looking around ({reason})"),
+                                )
+                            }
+                            _ => self.walk_back(now, step, pose, &reason)?,
                         }
                     }
                     None if active.is_none() && self.retry_stairs() => self.keep_going(
@@ -1346,6 +1391,51 @@ impl Agent {
             }
         };
         Ok(result)
+    }
+
+    /// Off a known floor, nothing reachable, looked around: walks back
+    /// along the trail to the last floor the robot stood on, once; with no
+    /// trail, already there, or when the walk back did not bring the robot
+    /// onto a known floor, there is nothing left to do: exhausted.
+    fn walk_back(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        pose: &RobotPose,
+        reason: &str,
+    ) -> Result<AgentCommand, AgentError> {
+        self.looking_around = 0;
+        match self.trail.first().copied() {
+            Some(back) if !self.walked_back && (back - pose.position).norm() > RETREAT_MIN_M => {
+                self.walked_back = true;
+                let mut path = vec![pose.position];
+                path.extend(self.trail.iter().rev().copied());
+                let mission = Mission::new(
+                    MissionKind::Relocate {
+                        cluster: ExecClusterId(u64::MAX),
+                    },
+                    back,
+                );
+                self.dispatch_as(
+                    now,
+                    step,
+                    mission,
+                    path,
+                    "retreat",
+                    format!("nothing reachable off a known floor after looking around: back along the trail to the last floor ({reason})"),
+                )
+            }
+            _ => {
+                self.decide(
+                    now,
+                    step,
+                    "exhausted",
+                    None,
+                    format!("nothing reachable off a known floor, no way back ({reason})"),
+                );
+                Ok(AgentCommand::Exhausted)
+            }
+        }
     }
 
     /// Dispatches `NAV_TO_OBJECT` toward candidate `target_id`, or rejects
