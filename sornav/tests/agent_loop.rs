@@ -207,3 +207,50 @@ fn every_agent_variant_finds_the_target() {
         }
     }
 }
+
+/// A robot the map does not place on any floor (on a stair or landing the
+/// map has not recognised) with nothing reachable looks around for a
+/// bounded number of decisions and then ends the search; it never turns
+/// in place for the rest of the episode.
+#[test]
+fn off_a_known_floor_with_nothing_reachable_the_search_ends() {
+    use nalgebra::Point3;
+    use sornav::executor::RobotPose;
+    // A closed 6 m x 4 m room: nothing to explore once it is seen.
+    let world = World {
+        blocks: vec![
+            wall(-0.1, -0.1, 6.1, 0.1),
+            wall(-0.1, 3.9, 6.1, 4.1),
+            wall(-0.1, -0.1, 0.1, 4.1),
+            wall(5.9, -0.1, 6.1, 4.1),
+        ],
+    };
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("find the television").unwrap();
+    // Seen from its floor, then 1.5 m above it (no known floor there).
+    agent
+        .observe(&world.observation(RobotPose::new(Point3::new(3.0, 2.0, 0.0), 0.0)))
+        .unwrap();
+    let pose = RobotPose::new(Point3::new(3.0, 2.0, 1.5), 0.0);
+    let mut ended = None;
+    for step in 0..200u64 {
+        agent.observe(&world.observation(pose)).unwrap();
+        let command = agent
+            .step(std::time::Duration::from_millis(500 * step))
+            .unwrap();
+        assert!(agent.current_level().is_none());
+        match command {
+            AgentCommand::Exhausted | AgentCommand::FloorExhausted { .. } => {
+                ended = Some(step);
+                break;
+            }
+            AgentCommand::Continue { mission: None } => {}
+            other => panic!("unexpected command off a known floor: {other:?}"),
+        }
+    }
+    let ended = ended.expect("the search ended");
+    // Two full turns of looking around (24 decisions), then the end.
+    assert!((20..=40).contains(&ended), "ended after {ended} decisions");
+    let last = agent.last_decision().unwrap();
+    assert!(last.reason.contains("no way back"), "{}", last.reason);
+}
