@@ -115,16 +115,16 @@ pub fn table(summaries: &[VariantSummary]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| variant | episodes | SR % (95% CI) | SPL % | soft SPL % | SR@1m % | same-floor SR % | step limit % | timeout % | false stop % | other % | cross-floor episodes % | relocating episodes % | mean actions | decision ms p50 / p99 | frame ms p50 | s / episode |"
+        "| variant | episodes | SR % (95% CI) | SPL % | soft SPL % | SR@1m % | same-floor SR % | step limit % | timeout % | false stop % | other % | cross-floor episodes % | relocating episodes % | mean actions | missions / episode | collisions / m | decision ms p50 / p99 | frame ms p50 | s / episode |"
     );
     let _ = writeln!(
         s,
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
     );
     for v in summaries {
         let _ = writeln!(
             s,
-            "| {} | {} | {} ({}-{}) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} | {:.2} / {:.2} | {:.2} | {:.2} |",
+            "| {} | {} | {} ({}-{}) | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.0} | {:.0} | {:.2} | {:.2} / {:.2} | {:.2} | {:.2} |",
             v.variant,
             v.episodes,
             pct(v.success_rate),
@@ -141,6 +141,8 @@ pub fn table(summaries: &[VariantSummary]) -> String {
             pct(v.cross_floor_rate),
             pct(v.relocation_rate),
             v.mean_actions,
+            v.mean_missions,
+            v.collisions_per_m,
             v.decision_ms_p50,
             v.decision_ms_p99,
             v.frame_ms_p50,

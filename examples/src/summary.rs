@@ -131,6 +131,15 @@ pub struct VariantSummary {
     pub mean_actions: f64,
     /// Mean blocked forward moves per episode.
     pub mean_collisions: f64,
+    /// Blocked forward moves per metre travelled (all episodes' collisions
+    /// over their summed path length; 0 without any path): with
+    /// `mean_missions`, the measure of thrashing.
+    #[serde(default)]
+    pub collisions_per_m: f64,
+    /// Mean missions the platform adopted per episode (a re-dispatch with a
+    /// new waypoint counts): how often the agent changed its mind.
+    #[serde(default)]
+    pub mean_missions: f64,
     /// Fraction of episodes with at least one relocation.
     pub relocation_rate: f64,
     /// Mean relocations per episode.
@@ -265,6 +274,16 @@ impl VariantSummary {
             other_rate: sim.other_rate,
             mean_actions: sim.mean_actions,
             mean_collisions: sim.mean_collisions,
+            collisions_per_m: {
+                let path: f64 = records.iter().map(|r| r.result.path_length_m).sum();
+                let collisions: usize = records.iter().map(|r| r.result.collisions).sum();
+                if path > 0.0 {
+                    collisions as f64 / path
+                } else {
+                    0.0
+                }
+            },
+            mean_missions: mean(records.iter().map(|r| r.missions as f64)),
             relocation_rate: rate(count(&|r| !r.relocations.is_empty())),
             mean_relocations: mean(records.iter().map(|r| r.relocations.len() as f64)),
             exhausted_rate: rate(count(&|r| r.agent_end == "exhausted")),
