@@ -340,6 +340,16 @@ impl MultiLevelMap {
     /// Where `p` is: on a level's floor, on a stair, or `None` (neither).
     pub fn locate(&self, p: &Point3<f64>) -> Option<Location> {
         if let Some(l) = self.level_at(p.z) {
+            // On a stair's first (or last) treads: within the level's
+            // tolerance of its floor but raised above (or below) it, on a
+            // stair's surface. The stair, not the level: the level's grid
+            // takes a tread within the step height for floor, and a path
+            // planned on it goes back to the stair's portal at its foot
+            // first (the robot stepped up and down the first tread until
+            // the action budget ran out).
+            if let Some(si) = self.low_tread(l, p) {
+                return Some(Location::Stair(si));
+            }
             return Some(Location::Level(l));
         }
         let key = self.surfaces.key(p.x, p.y)?;
@@ -364,6 +374,20 @@ impl MultiLevelMap {
             })
             .min_by(|a, b| a.1.total_cmp(&b.1))
             .map(|(si, _)| Location::Stair(si))
+    }
+
+    /// The stair whose walkable surface holds `p` (within `TREAD_DZ` of
+    /// its height) when `p` is more than `TREAD_DZ` off the floor of level
+    /// `l`; see [`Self::locate`].
+    fn low_tread(&self, l: LevelId, p: &Point3<f64>) -> Option<usize> {
+        let level = self.levels().find(|x| x.id == l)?;
+        if (p.z - level.floor_z).abs() <= TREAD_DZ {
+            return None;
+        }
+        let key = self.surfaces.key(p.x, p.y)?;
+        self.stairs
+            .iter()
+            .position(|s| s.supports(key, p.z, TREAD_DZ))
     }
 
     /// Whether the robot can stand at `p`: a traversable cell of the level
@@ -1162,6 +1186,10 @@ impl MultiLevelMap {
         }))
     }
 }
+
+/// A point this far (m) off its level's floor, on a stair surface within
+/// this height, stands on a tread ([`MultiLevelMap::locate`]).
+const TREAD_DZ: f64 = 0.05;
 
 /// How far (m) past a stair's end the robot steps onto a floor not mapped
 /// yet.

@@ -14,7 +14,7 @@ use common::{World, config as world_config, reference_union_dijkstra, world_stra
 use nalgebra::{Point2, Point3, Vector3};
 use proptest::prelude::*;
 use sornav_frontier_graph::{
-    Cell, FrontierError, FrontierMap, FrontierMapConfig, LevelId, MultiLevelMap, NodeId,
+    Cell, FrontierError, FrontierMap, FrontierMapConfig, LevelId, Location, MultiLevelMap, NodeId,
     OccupancyGrid, STAIR_FRONTIER_BASE, path_cells,
 };
 use std::cmp::Reverse;
@@ -680,6 +680,41 @@ proptest! {
                     prop_assert!(rise(open) >= top - 1e-6, "open end rises {} < {}; {}", rise(open), top, ctx);
                 }
             }
+        }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(24))]
+
+    /// A robot on a stair's first treads (within the lower level's
+    /// tolerance of its floor, but raised above it) is located on the
+    /// stair, and its path up the stair never goes back down to the floor
+    /// (planned on the level's grid, which takes a low tread for floor, it
+    /// went back to the stair's foot first). Feet on the floor are on the
+    /// level.
+    #[test]
+    fn a_robot_on_the_first_treads_is_on_the_stair(scene in scene_strategy()) {
+        let mut map = explore(&scene);
+        let ctx = describe(&scene);
+        let tol = map.config().levels.robot_level_tolerance;
+        let Some(s) = map.stairs().first().cloned() else {
+            return Ok(());
+        };
+        for f in &scene.feet {
+            if f.z.abs() <= 0.01 {
+                prop_assert_eq!(map.locate(f), Some(Location::Level(LevelId(0))), "{:?}; {}", f, ctx);
+            }
+        }
+        // The stair's own path points on its low treads.
+        let low: Vec<Point3<f64>> = s.path.iter().copied().filter(|q| q.z > 0.06 && q.z <= tol).collect();
+        for f in &low {
+            prop_assert!(matches!(map.locate(f), Some(Location::Stair(_))), "{:?} located {:?}; {}", f, map.locate(f), ctx);
+            let path = map.path(f, &s.upper.position).unwrap();
+            let path = path.expect("a path up the stair");
+            let lowest = path.path.iter().map(|q| q.z).fold(f64::INFINITY, f64::min);
+            prop_assert!(lowest >= f.z - map.config().grid.step_height - 1e-6,
+                "from {:?} the path goes down to {}; {}", f, lowest, ctx);
         }
     }
 }
