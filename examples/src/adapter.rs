@@ -531,6 +531,12 @@ impl<F: AgentFactory> SornavPolicy<F> {
         } else {
             0.0
         };
+        self.tilt_toward(want)
+    }
+
+    /// LOOK_DOWN / LOOK_UP toward camera pitch `want` (radians, positive
+    /// up); `None` within half a tilt step of it.
+    fn tilt_toward(&self, want: f64) -> Option<Action> {
         let half = self.tilt / 2.0;
         if self.pitch > want + half {
             Some(Action::LookDown)
@@ -711,14 +717,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
                     .as_ref()
                     .is_some_and(|a| a.current_level().is_none());
                 let want = if between { -self.tilt } else { 0.0 };
-                let half = self.tilt / 2.0;
-                if self.pitch > want + half {
-                    Action::LookDown
-                } else if self.pitch < want - half {
-                    Action::LookUp
-                } else {
-                    Action::TurnLeft
-                }
+                self.tilt_toward(want).unwrap_or(Action::TurnLeft)
             }
             AgentCommand::Verify { look_at, .. } => {
                 self.drop_mission();

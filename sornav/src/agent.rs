@@ -1329,18 +1329,10 @@ impl Agent {
                         let last_placed = self.last_placed;
                         match last_placed {
                             Some(back) if (back - pose.position).norm() > RETREAT_MIN_M => {
-                                let mission = Mission::new(
-                                    MissionKind::Relocate {
-                                        cluster: ExecClusterId(u64::MAX),
-                                    },
-                                    back,
-                                );
-                                self.dispatch_as(
+                                self.retreat(
                                     now,
                                     step,
-                                    mission,
                                     vec![pose.position, back],
-                                    "retreat",
                                     format!("no reachable frontier off a known floor: back to the last place with one ({reason})"),
                                 )?
                             }
@@ -1393,6 +1385,27 @@ impl Agent {
         Ok(result)
     }
 
+    /// Dispatches a retreat (a relocation outside any cluster) along
+    /// `path` to its last point.
+    fn retreat(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        path: Vec<Point3<f64>>,
+        reason: String,
+    ) -> Result<AgentCommand, AgentError> {
+        let Some(&back) = path.last() else {
+            return Ok(self.keep_going(now, step, reason));
+        };
+        let mission = Mission::new(
+            MissionKind::Relocate {
+                cluster: ExecClusterId(u64::MAX),
+            },
+            back,
+        );
+        self.dispatch_as(now, step, mission, path, "retreat", reason)
+    }
+
     /// Off a known floor, nothing reachable, looked around: walks back
     /// along the trail to the last floor the robot stood on, once; with no
     /// trail, already there, or when the walk back did not bring the robot
@@ -1410,18 +1423,10 @@ impl Agent {
                 self.walked_back = true;
                 let mut path = vec![pose.position];
                 path.extend(self.trail.iter().rev().copied());
-                let mission = Mission::new(
-                    MissionKind::Relocate {
-                        cluster: ExecClusterId(u64::MAX),
-                    },
-                    back,
-                );
-                self.dispatch_as(
+                self.retreat(
                     now,
                     step,
-                    mission,
                     path,
-                    "retreat",
                     format!("nothing reachable off a known floor after looking around: back along the trail to the last floor ({reason})"),
                 )
             }

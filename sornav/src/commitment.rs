@@ -30,7 +30,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 use sornav_frontier_graph::{FrontierGraph, FrontierId, NodeId};
 
-use crate::ordering::Route;
+use crate::ordering::{self, Route};
 
 /// Settings of the exploration commitment.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -113,12 +113,20 @@ fn cost(graph: &FrontierGraph, a: NodeId, b: NodeId) -> Option<f64> {
     if a == b {
         return Some(0.0);
     }
-    if let Some(c) = graph.cost(a, b).filter(|c| c.is_finite()) {
-        return Some(c);
-    }
-    let ra = graph.cost(NodeId::Robot, a).filter(|c| c.is_finite())?;
-    let rb = graph.cost(NodeId::Robot, b).filter(|c| c.is_finite())?;
-    Some(ra + rb)
+    let from_robot = |n: NodeId| {
+        if n == NodeId::Robot {
+            Some(0.0)
+        } else {
+            graph.cost(NodeId::Robot, n).filter(|c| c.is_finite())
+        }
+    };
+    Some(ordering::pair_cost(
+        graph,
+        a,
+        b,
+        from_robot(a)?,
+        from_robot(b)?,
+    ))
 }
 
 /// The extra cost of visiting `committed` before the route's first

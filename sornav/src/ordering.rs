@@ -60,6 +60,16 @@ fn reachable(graph: &FrontierGraph, excluded: &BTreeSet<FrontierId>) -> Vec<Reac
         .collect()
 }
 
+/// G_F's cost between nodes `a` and `b` whose costs from the robot are
+/// `ra` and `rb`: their edge, or (both reachable from the robot) through
+/// the robot, an executable upper bound.
+pub(crate) fn pair_cost(graph: &FrontierGraph, a: NodeId, b: NodeId, ra: f64, rb: f64) -> f64 {
+    graph
+        .cost(a, b)
+        .filter(|c| c.is_finite())
+        .unwrap_or(ra + rb)
+}
+
 /// Everything the orderings read.
 pub(crate) struct OrderingInput<'a> {
     pub graph: &'a FrontierGraph,
@@ -112,13 +122,13 @@ fn tsp(
             leg(i.max(j))
         } else {
             let (a, b) = (&cands[i - 1], &cands[j - 1]);
-            input
-                .graph
-                .cost(NodeId::Frontier(a.id), NodeId::Frontier(b.id))
-                .filter(|c| c.is_finite())
-                // Both are reachable from the robot: going through it is an
-                // executable upper bound.
-                .unwrap_or(a.cost + b.cost)
+            pair_cost(
+                input.graph,
+                NodeId::Frontier(a.id),
+                NodeId::Frontier(b.id),
+                a.cost,
+                b.cost,
+            )
         }
     })?;
     let problem = HorizonProblem {
