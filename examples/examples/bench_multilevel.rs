@@ -123,10 +123,41 @@ fn tour(scene: &Scene, nav: &NavMesh) -> Vec<Point3<f64>> {
     stops
 }
 
+/// Times the rebuild of a map state written by `SORNAV_BENCH_DUMP` (median
+/// of 7), with each level's refresh statistics: a quick loop for work on the
+/// rebuild without rendering a tour.
+fn rebuild_only(path: &std::ffi::OsStr) -> Result<(), String> {
+    let f = std::fs::File::open(path).map_err(|e| e.to_string())?;
+    let (map, at): (sornav::frontier_graph::MultiLevelMap, Point3<f64>) =
+        serde_json::from_reader(std::io::BufReader::new(f)).map_err(|e| e.to_string())?;
+    let mut times = Vec::new();
+    for _ in 0..7 {
+        let mut m = map.clone();
+        let t = Instant::now();
+        m.rebuild();
+        m.frontier_graph(&at).map_err(|e| e.to_string())?;
+        times.push(t.elapsed().as_secs_f64() * 1e3);
+        for l in m.levels() {
+            if let Some(lm) = m.level_map(l.id) {
+                eprintln!("level {:?}: {:?}", l.id, lm.last_refresh());
+            }
+        }
+    }
+    println!(
+        "{{\"bench\":\"multilevel-rebuild\",\"rebuild_ms\":{:.1},\"frontiers\":{}}}",
+        median(times),
+        map.graph().len()
+    );
+    Ok(())
+}
+
 fn main() -> Result<(), String> {
     let mut args = std::env::args().skip(1);
     let case = args.next().unwrap_or_else(|| "30x30".into());
     let seed: u64 = args.next().and_then(|s| s.parse().ok()).unwrap_or(0);
+    if let Some(path) = std::env::var_os("SORNAV_BENCH_LOAD") {
+        return rebuild_only(&path);
+    }
     let scene = match case.as_str() {
         "30x30" => house_30x30(seed)?,
         "hm3d" => house_hm3d(seed)?,
@@ -196,6 +227,11 @@ fn main() -> Result<(), String> {
         upd99.push(percentile(&mut upd, 0.99));
         ref50.push(percentile(&mut refresh, 0.5));
         ref99.push(percentile(&mut refresh, 0.99));
+        if let Some(path) = std::env::var_os("SORNAV_BENCH_DUMP") {
+            let f = std::fs::File::create(path).map_err(|e| e.to_string())?;
+            serde_json::to_writer(std::io::BufWriter::new(f), &(&w.map, &at))
+                .map_err(|e| e.to_string())?;
+        }
         let t = Instant::now();
         w.map.rebuild();
         w.map.frontier_graph(&at).map_err(e)?;

@@ -62,6 +62,17 @@ pub struct OccupancyGrid {
     mark: Vec<u8>,
     /// Offsets of the inflation disk.
     disk: Vec<(i32, i32)>,
+    /// Identifies the traversable layer's content: a fresh process-wide
+    /// value whenever it changes (or the grid is resized or loaded), so
+    /// caches derived from it (search components) know when they are stale.
+    #[serde(skip, default = "fresh_version")]
+    trav_version: u64,
+}
+
+/// A process-wide unique [`OccupancyGrid::trav_version`].
+fn fresh_version() -> u64 {
+    static NEXT: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
+    NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
 }
 
 /// Unvalidated deserialised form of [`OccupancyGrid`].
@@ -130,6 +141,7 @@ impl TryFrom<GridData> for OccupancyGrid {
         g.frontier = d.frontier;
         g.segment = d.segment;
         g.mark = vec![0; n];
+        g.trav_version = fresh_version();
         // Recompute the derived layers and check them against the file.
         for i in 0..n {
             if g.state_at(i) == CellState::Occupied {
@@ -194,6 +206,7 @@ impl OccupancyGrid {
             segment: Vec::new(),
             mark: Vec::new(),
             disk,
+            trav_version: fresh_version(),
         })
     }
 
@@ -300,6 +313,11 @@ impl OccupancyGrid {
         self.trav[i]
     }
 
+    /// Changes whenever the traversability layer changes (see the field).
+    pub(crate) fn trav_version(&self) -> u64 {
+        self.trav_version
+    }
+
     /// The traversability layer (row-major, `dims().0` columns).
     pub(crate) fn trav_layer(&self) -> &[bool] {
         &self.trav
@@ -365,6 +383,7 @@ impl OccupancyGrid {
         self.frontier = frontier;
         self.segment = segment;
         self.mark = vec![0; w * h];
+        self.trav_version = fresh_version();
         Ok(())
     }
 
@@ -511,6 +530,9 @@ impl OccupancyGrid {
             let t = self.state_at(i) == CellState::Free && self.occ_count[i] == 0;
             if t != self.trav[i] {
                 self.trav[i] = t;
+                if delta.gained.is_empty() && delta.lost.is_empty() {
+                    self.trav_version = fresh_version();
+                }
                 let c = self.cell_at(i);
                 if t {
                     delta.gained.push(c);

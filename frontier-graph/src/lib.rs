@@ -90,6 +90,7 @@
 #![deny(missing_docs)]
 
 mod cell;
+mod components;
 mod config;
 mod error;
 mod frontier;

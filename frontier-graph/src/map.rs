@@ -5,6 +5,7 @@ use rustc_hash::{FxHashMap, FxHashSet};
 use serde::{Deserialize, Serialize};
 
 use crate::cell::cell_of;
+use crate::components::Components;
 use crate::frontier::Detector;
 use crate::graph::pair;
 use crate::search::{Scratch, dijkstra, extract_path};
@@ -40,6 +41,10 @@ pub struct RefreshStats {
     pub rows_recomputed: usize,
     /// Whether the lower-bound search from newly traversable cells ran.
     pub gain_search: bool,
+    /// Cells settled by all shortest-path searches of the refresh (the
+    /// refresh's work; targets in another component cost none).
+    #[serde(default)]
+    pub cells_settled: usize,
 }
 
 /// Changes accumulated since the last graph refresh.
@@ -76,6 +81,8 @@ pub struct FrontierMap {
     portal_targets: std::collections::BTreeMap<u32, Point2<f64>>,
     #[serde(skip)]
     scratch: Scratch,
+    #[serde(skip)]
+    components: Components,
 }
 
 /// Unvalidated deserialised form of [`FrontierMap`].
@@ -131,6 +138,7 @@ impl TryFrom<MapData> for FrontierMap {
             level: d.level,
             portal_targets: d.portal_targets,
             scratch: Scratch::default(),
+            components: Components::default(),
         })
     }
 }
@@ -158,6 +166,7 @@ impl FrontierMap {
             level,
             portal_targets: std::collections::BTreeMap::new(),
             scratch: Scratch::default(),
+            components: Components::default(),
         })
     }
 
@@ -539,16 +548,25 @@ impl FrontierMap {
             }
             gained.sort_unstable();
             gained.dedup();
-            if !gained.is_empty() && v > 1 {
+            // Only nodes in a component of a gained cell can gain a path.
+            let comp = self.components.refresh(&self.grid);
+            let mut labels: Vec<u32> = gained.iter().map(|&i| comp.label(i)).collect();
+            labels.sort_unstable();
+            labels.dedup();
+            let targets: Vec<usize> = nodes
+                .iter()
+                .filter_map(|n| self.grid.index(n.1))
+                .filter(|&i| labels.binary_search(&comp.label(i)).is_ok())
+                .collect();
+            if !targets.is_empty() && v > 1 {
                 stats.gain_search = true;
-                let targets: Vec<usize> =
-                    nodes.iter().filter_map(|n| self.grid.index(n.1)).collect();
-                dijkstra(&self.grid, &mut self.scratch, &gained, &targets);
+                stats.cells_settled += dijkstra(&self.grid, &mut self.scratch, &gained, &targets);
                 let lb: Vec<Option<f64>> = nodes
                     .iter()
                     .map(|n| {
                         self.grid
                             .index(n.1)
+                            .filter(|&i| labels.binary_search(&comp.label(i)).is_ok())
                             .and_then(|i| self.scratch.settled(i))
                             .map(|d| d * res)
                     })
@@ -603,19 +621,29 @@ impl FrontierMap {
                 }
                 continue;
             };
+            // Targets in other components have no path: no search for them.
+            let comp = self.components.refresh(&self.grid);
+            let home = comp.label(src);
             let targets: Vec<usize> = row
                 .iter()
                 .filter_map(|&b| self.grid.index(nodes[b].1))
+                .filter(|&t| comp.label(t) == home && home != 0)
                 .collect();
-            dijkstra(&self.grid, &mut self.scratch, &[src], &targets);
+            if !targets.is_empty() {
+                stats.cells_settled += dijkstra(&self.grid, &mut self.scratch, &[src], &targets);
+            }
             for &b in &row {
                 let (idb, cb, db) = nodes[b];
                 let key = pair(ida, idb);
-                let found = self.grid.index(cb).and_then(|t| {
-                    let d = self.scratch.settled(t)?;
-                    let (path, bbox) = extract_path(&self.grid, &self.scratch, t)?;
-                    Some((d * res, path, bbox))
-                });
+                let found = self
+                    .grid
+                    .index(cb)
+                    .filter(|&t| comp.label(t) == home && home != 0)
+                    .and_then(|t| {
+                        let d = self.scratch.settled(t)?;
+                        let (path, bbox) = extract_path(&self.grid, &self.scratch, t)?;
+                        Some((d * res, path, bbox))
+                    });
                 match found {
                     Some((length, mut path, bbox)) => {
                         if key.0 != ida {
@@ -688,6 +716,10 @@ impl FrontierMap {
         let (Some(ia), Some(ib)) = (self.grid.index(a), self.grid.index(b)) else {
             return Ok(None);
         };
+        let comp = self.components.refresh(&self.grid);
+        if comp.label(ia) == 0 || comp.label(ia) != comp.label(ib) {
+            return Ok(None);
+        }
         dijkstra(&self.grid, &mut self.scratch, &[ia], &[ib]);
         let Some(d) = self.scratch.settled(ib) else {
             return Ok(None);

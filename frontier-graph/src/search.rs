@@ -147,7 +147,8 @@ struct Overflow;
 /// Sources that are not traversable are ignored. When `targets` is non-empty,
 /// the search stops as soon as all traversable targets are settled. Results
 /// are read with [`Scratch::settled`] and [`extract_path`]. Distances are
-/// exact (see [`Label`]).
+/// exact (see [`Label`]). Returns the number of cells settled (the
+/// search's work).
 ///
 /// Relies on the grid invariant that no traversable cell lies on the outer
 /// ring of the allocated area (the grid keeps a margin around every cell an
@@ -162,21 +163,25 @@ pub(crate) fn dijkstra(
     s: &mut Scratch,
     sources: &[usize],
     targets: &[usize],
-) {
+) -> usize {
     let n = grid.cell_count();
     s.prepare(n);
     s.wide = false;
     let mut dist = std::mem::take(&mut s.dist);
     let done = search(grid, s, &mut dist, sources, targets);
     s.dist = dist;
-    if done.is_err() {
-        s.prepare(n);
-        s.wide = true;
-        let mut wide = std::mem::take(&mut s.wide_dist);
-        wide.resize(n, 0);
-        // Cannot overflow: counts stay below the number of grid cells < 2^32.
-        let _ = search(grid, s, &mut wide, sources, targets);
-        s.wide_dist = wide;
+    match done {
+        Ok(settled) => settled,
+        Err(Overflow) => {
+            s.prepare(n);
+            s.wide = true;
+            let mut wide = std::mem::take(&mut s.wide_dist);
+            wide.resize(n, 0);
+            // Cannot overflow: counts stay below the number of grid cells < 2^32.
+            let settled = search(grid, s, &mut wide, sources, targets).unwrap_or(0);
+            s.wide_dist = wide;
+            settled
+        }
     }
 }
 
@@ -187,7 +192,7 @@ fn search<L: Label>(
     dist: &mut [L],
     sources: &[usize],
     targets: &[usize],
-) -> Result<(), Overflow> {
+) -> Result<usize, Overflow> {
     let n = grid.cell_count();
     let g = s.generation;
     let (reached, settled) = (2 * g, 2 * g + 1);
@@ -211,6 +216,7 @@ fn search<L: Label>(
     let stop_early = !pending.is_empty();
     let mut next_target = 0usize;
     let mut queued = 0usize;
+    let mut count = 0usize;
     for &src in sources {
         if src < n && trav[src] && state[src] != reached {
             state[src] = reached;
@@ -236,6 +242,7 @@ fn search<L: Label>(
                 continue;
             }
             state[i] = settled;
+            count += 1;
             let d = dist[i];
             // The 3 x 3 neighbourhood as three row slices (3 bounds checks
             // instead of 8); traversable cells never touch the grid border.
@@ -296,11 +303,11 @@ fn search<L: Label>(
                 next_target += 1;
             }
             if next_target == pending.len() {
-                return Ok(());
+                return Ok(count);
             }
         }
     }
-    Ok(())
+    Ok(count)
 }
 
 /// A compressed path and the bounding box (min, max) of its cells.

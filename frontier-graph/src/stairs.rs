@@ -300,8 +300,8 @@ pub(crate) fn extract(
     };
     // 2. Components and attachments.
     let mut uf = UnionFind::<usize>::new(off.len());
-    // (node, level, on-level column)
-    let mut feet: Vec<(usize, usize, ColumnKey)> = Vec::new();
+    // (node, level, on-level column, that column's surface height)
+    let mut feet: Vec<Foot> = Vec::new();
     for (i, &(k, z)) in off.iter().enumerate() {
         for (n, z2, kind) in nodes.linked(k) {
             if (z2 - z).abs() > p.step {
@@ -311,7 +311,7 @@ pub(crate) fn extract(
                 Kind::Off(j) => {
                     uf.union(i, j);
                 }
-                Kind::On(l) => feet.push((i, l, n)),
+                Kind::On(l) => feet.push((i, l, n, z2)),
             }
         }
     }
@@ -319,7 +319,7 @@ pub(crate) fn extract(
     for i in 0..off.len() {
         comps.entry(uf.find(i)).or_default().push(i);
     }
-    let mut comp_feet: BTreeMap<usize, Vec<(usize, usize, ColumnKey)>> = BTreeMap::new();
+    let mut comp_feet: BTreeMap<usize, Vec<Foot>> = BTreeMap::new();
     for f in feet {
         comp_feet.entry(uf.find(f.0)).or_default().push(f);
     }
@@ -418,6 +418,13 @@ pub(crate) fn extract(
     out
 }
 
+/// Where a stair meets a level: (off-level node, level, the adjacent
+/// on-level column, that column's surface height). The stair's end point is
+/// that surface, not the level's nominal floor height: the two differ by up
+/// to the level tolerance, and the step from the end to the first tread is
+/// only bounded from the real surface.
+type Foot = (usize, usize, ColumnKey, f32);
+
 fn point(map: &SurfaceMap, k: ColumnKey, z: f64) -> Point3<f64> {
     let (x, y) = map.center(k);
     Point3::new(x, y, z)
@@ -433,7 +440,7 @@ fn chain(
     off: &[(ColumnKey, f32)],
     walk: &FxHashMap<(ColumnKey, u32), usize>,
     nodes: &Nodes<'_>,
-    feet: &[(usize, usize, ColumnKey)],
+    feet: &[Foot],
     levels: &[f64],
     start: usize,
     goal: Option<usize>,
@@ -445,31 +452,31 @@ fn chain(
     // Dijkstra state keyed by node index.
     let mut dist: FxHashMap<usize, f64> = FxHashMap::default();
     // parent: Ok(node) or Err(level column the chain starts from)
-    let mut parent: FxHashMap<usize, Result<usize, ColumnKey>> = FxHashMap::default();
+    let mut parent: FxHashMap<usize, Result<usize, (ColumnKey, f32)>> = FxHashMap::default();
     let mut heap = BinaryHeap::new();
     let key = |d: f64| Reverse(ordered(d));
     let hs = levels[start];
-    for &(i, l, col) in feet {
+    for &(i, l, col, zf) in feet {
         if l != start || !walk.contains_key(&(off[i].0, off[i].1.to_bits())) {
             continue;
         }
-        let d = (node_point(i) - point(map, col, hs)).norm();
+        let d = (node_point(i) - point(map, col, f64::from(zf))).norm();
         if dist.get(&i).is_none_or(|&old| d < old) {
             dist.insert(i, d);
-            parent.insert(i, Err(col));
+            parent.insert(i, Err((col, zf)));
             heap.push((key(d), i));
         }
     }
-    let goal_feet: FxHashMap<usize, ColumnKey> = goal
+    let goal_feet: FxHashMap<usize, (ColumnKey, f32)> = goal
         .map(|g| {
             feet.iter()
                 .filter(|f| f.1 == g)
-                .map(|f| (f.0, f.2))
+                .map(|f| (f.0, (f.2, f.3)))
                 .collect()
         })
         .unwrap_or_default();
     let mut best_end: Option<(usize, f64)> = None;
-    let mut reached_goal: Option<(usize, ColumnKey)> = None;
+    let mut reached_goal: Option<(usize, (ColumnKey, f32))> = None;
     let mut done: FxHashMap<usize, ()> = FxHashMap::default();
     while let Some((Reverse(d), i)) = heap.pop() {
         let d = d.0;
@@ -514,8 +521,8 @@ fn chain(
     };
     // Reconstruct.
     let mut rev = Vec::new();
-    if let Some(col) = end_col {
-        rev.push(point(map, col, levels[goal.unwrap_or(start)]));
+    if let Some((col, zf)) = end_col {
+        rev.push(point(map, col, f64::from(zf)));
     }
     let mut i = end;
     let start_col = loop {
@@ -526,7 +533,7 @@ fn chain(
             None => return None,
         }
     };
-    rev.push(point(map, start_col, hs));
+    rev.push(point(map, start_col.0, f64::from(start_col.1)));
     rev.reverse();
     let length = rev.windows(2).map(|w| (w[1] - w[0]).norm()).sum();
     let mut columns: Vec<(ColumnKey, f32)> =

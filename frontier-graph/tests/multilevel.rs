@@ -499,6 +499,16 @@ impl StairReference {
         })
     }
 
+    /// The surface height of `level` in column `col` (where a stair's end
+    /// stands: the real surface, within the level tolerance of the floor).
+    fn foot_z(&self, level: usize, col: (i32, i32)) -> Option<f64> {
+        self.by_col
+            .get(&col)?
+            .iter()
+            .find(|&&j| self.nodes[j].level == Some(level))
+            .map(|&j| f64::from(self.nodes[j].z))
+    }
+
     /// The level columns a walkable off-level node is a foot of.
     fn feet(&self, i: usize) -> Vec<(usize, (i32, i32))> {
         if !self.nodes[i].walkable {
@@ -547,7 +557,7 @@ impl StairReference {
     /// floor point of `col` on `level` to every walkable node: Dijkstra
     /// over all nodes.
     fn paths_from_end(&self, level: usize, col: (i32, i32)) -> HashMap<usize, f64> {
-        let start = self.point(col, self.floors[level]);
+        let start = self.point(col, self.foot_z(level, col).unwrap_or(self.floors[level]));
         let mut dist: HashMap<usize, f64> = HashMap::new();
         let mut heap = BinaryHeap::new();
         for i in 0..self.nodes.len() {
@@ -587,7 +597,8 @@ proptest! {
     /// * the level pairs joined by the complete stairs are exactly the
     ///   pairs the reference joins by a walkable step-path;
     /// * every stair's path is a chain of walkable, step-connected,
-    ///   off-level surfaces, with a level end next to a foot;
+    ///   off-level surfaces, with a level end next to a foot, on that
+    ///   level's real surface there (not its nominal floor height);
     /// * a complete stair is at least as long as the reference's shortest
     ///   step-path between its two ends and at most one column hop longer
     ///   (the chain stops at the first foot of the upper level it reaches
@@ -648,7 +659,8 @@ proptest! {
             let ends = [(&s.lower, ids[0]), (&s.upper, *ids.last().unwrap())];
             for (end, node) in ends {
                 if let Some(l) = level_index(end.level) {
-                    prop_assert!((end.position.z - r.floors[l]).abs() < 1e-9, "{}", ctx);
+                    let foot = r.foot_z(l, r.col_of(&end.position));
+                    prop_assert!(foot.is_some_and(|z| (end.position.z - z).abs() < 1e-9), "end {:?} not on its level's surface {:?}; {}", end.position, foot, ctx);
                     prop_assert!(r.feet(node).contains(&(l, r.col_of(&end.position))), "end not next to its foot; {}", ctx);
                 }
             }
