@@ -40,7 +40,19 @@ trait Label: Copy {
     fn step(self, diag: bool) -> Option<Self>;
     /// `a + b√2` in cells.
     fn value(self) -> f64;
+    /// A key ordered exactly as [`value`](Self::value) (equal keys for
+    /// equal lengths), cheaper to compare.
+    type Key: PartialOrd + Copy;
+    /// The key of this length.
+    fn key(self) -> Self::Key;
+    /// `floor(value)`: the bucket (before the modulo) of this length.
+    fn bucket(self) -> usize;
 }
+
+/// Fixed-point scale of the [`u32`] label keys: `2^35`.
+const KEY_SHIFT: u32 = 35;
+/// `round(√2 · 2^35)`.
+const KEY_SQRT2: u64 = 48_592_008_000;
 
 /// Counts below 2^16 each: the compact label (4 bytes per cell keeps the
 /// distance array of a large map in cache).
@@ -58,6 +70,26 @@ impl Label for u32 {
     #[inline]
     fn value(self) -> f64 {
         f64::from(self & 0xFFFF) + f64::from(self >> 16) * SQRT_2
+    }
+    /// `a · 2^35 + b · round(√2 · 2^35)` in integers (below 2^53). Exact
+    /// order: the rounding error is at most `b / 2 < 2^15` per key, while
+    /// two distinct lengths `a + b√2` with counts below 2^16 differ by at
+    /// least `1 / |p − q√2| > 5.3e-6` (as `|p² − 2q²| ≥ 1`), i.e. by more
+    /// than 1.8e5 key units.
+    type Key = u64;
+    #[inline]
+    fn key(self) -> u64 {
+        (u64::from(self & 0xFFFF) << KEY_SHIFT) + u64::from(self >> 16) * KEY_SQRT2
+    }
+    /// `key >> 35`: the key's error (below 1e-6 cells) is smaller than the
+    /// distance of any `b√2` (`0 < b < 2^16`) to an integer (above 5.3e-6),
+    /// so this is exactly `floor(a + b√2)`.
+    #[inline]
+    fn bucket(self) -> usize {
+        // Below 2^18.
+        #[allow(clippy::cast_possible_truncation)]
+        let b = (self.key() >> KEY_SHIFT) as usize;
+        b
     }
 }
 
@@ -78,6 +110,19 @@ impl Label for u64 {
     #[allow(clippy::cast_possible_truncation)] // Halves of a u64 fit in u32.
     fn value(self) -> f64 {
         f64::from(self as u32) + f64::from((self >> 32) as u32) * SQRT_2
+    }
+    /// The `f64` value (exact order, see [`Label`]).
+    type Key = f64;
+    #[inline]
+    fn key(self) -> f64 {
+        self.value()
+    }
+    #[inline]
+    fn bucket(self) -> usize {
+        // Finite, non-negative, far below usize::MAX.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        let b = self.value() as usize;
+        b
     }
 }
 
@@ -255,44 +300,50 @@ fn search<L: Label>(
                 continue;
             };
             let (e, wst, n, s8) = (mid[2], mid[0], up[1], down[1]);
-            // Diagonals need both straight neighbours (no corner cutting).
-            let ok = [
-                e,
-                wst,
-                n,
-                s8,
-                e && n && up[2],
-                e && s8 && down[2],
-                wst && n && up[0],
-                wst && s8 && down[0],
-            ];
             let straight = d.step(false).ok_or(Overflow)?;
             let diagonal = d.step(true).ok_or(Overflow)?;
-            let (vs, vd) = (straight.value(), diagonal.value());
-            for k8 in 0..8 {
-                if !ok[k8] {
-                    continue;
-                }
-                let j = i.wrapping_add_signed(off[k8]);
-                let sj = state[j];
-                if sj == settled {
-                    continue;
-                }
-                let (nd, nv) = if k8 < 4 {
-                    (straight, vs)
-                } else {
-                    (diagonal, vd)
-                };
-                if sj != reached || nv < dist[j].value() {
-                    state[j] = reached;
-                    dist[j] = nd;
-                    parent[j] = k8 as u8;
-                    // Finite, non-negative, far below usize::MAX.
-                    #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
-                    let nb = (nv as usize) % NB;
-                    buckets[nb].push(j as u32);
-                    queued += 1;
-                }
+            let (ks, kd) = (straight.key(), diagonal.key());
+            let (bs, bd) = (straight.bucket(), diagonal.bucket());
+            // Relaxes the move `k8` (index into DIRS) with label `nd`.
+            macro_rules! relax {
+                ($k8:expr, $nd:expr, $key:expr, $bucket:expr) => {{
+                    let j = i.wrapping_add_signed(off[$k8]);
+                    let sj = state[j];
+                    if sj != settled && (sj != reached || $key < dist[j].key()) {
+                        state[j] = reached;
+                        dist[j] = $nd;
+                        parent[j] = $k8;
+                        // Dense indices fit in u32 (see OccupancyGrid::ensure).
+                        #[allow(clippy::cast_possible_truncation)]
+                        buckets[$bucket % NB].push(j as u32);
+                        queued += 1;
+                    }
+                }};
+            }
+            if e {
+                relax!(0, straight, ks, bs);
+            }
+            if wst {
+                relax!(1, straight, ks, bs);
+            }
+            if n {
+                relax!(2, straight, ks, bs);
+            }
+            if s8 {
+                relax!(3, straight, ks, bs);
+            }
+            // Diagonals need both straight neighbours (no corner cutting).
+            if e && n && up[2] {
+                relax!(4, diagonal, kd, bd);
+            }
+            if e && s8 && down[2] {
+                relax!(5, diagonal, kd, bd);
+            }
+            if wst && n && up[0] {
+                relax!(6, diagonal, kd, bd);
+            }
+            if wst && s8 && down[0] {
+                relax!(7, diagonal, kd, bd);
             }
         }
         buckets[b] = items;
@@ -360,6 +411,61 @@ mod tests {
     use super::*;
     use crate::{FrontierMap, FrontierMapConfig};
     use nalgebra::Point3;
+
+    /// `sign(x + y√2)` in exact integer arithmetic.
+    fn sign_exact(x: i64, y: i64) -> std::cmp::Ordering {
+        use std::cmp::Ordering::{Equal, Greater, Less};
+        let (x2, y2) = (
+            i128::from(x) * i128::from(x),
+            2 * i128::from(y) * i128::from(y),
+        );
+        match (x.signum(), y.signum()) {
+            (0, 0) => Equal,
+            (sx, sy) if sx >= 0 && sy >= 0 => Greater,
+            (sx, sy) if sx <= 0 && sy <= 0 => Less,
+            // Opposite signs: the larger magnitude wins.
+            (sx, _) if sx > 0 => x2.cmp(&y2),
+            _ => y2.cmp(&x2),
+        }
+    }
+
+    /// Packs `a` straight and `b` diagonal moves.
+    fn label(a: u32, b: u32) -> u32 {
+        (b << 16) | a
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(4096))]
+        /// The integer keys order lengths exactly as `a + b√2` (reference:
+        /// exact integer sign test) and give `floor(a + b√2)` as bucket
+        /// (reference: `a + isqrt(2b²)`), up to the largest counts.
+        #[test]
+        fn keys_order_lengths_exactly(
+            a in 0u32..0x1_0000, b in 0u32..0x1_0000,
+            da in -300i64..300, db in -300i64..300,
+            near in proptest::bool::ANY,
+        ) {
+            // Near-ties come from nearby counts along a convergent of √2.
+            let (c, d) = if near {
+                (i64::from(a) + da * 577 - db * 816, i64::from(b) - da * 408 + db * 577)
+            } else {
+                (i64::from(a) + da, i64::from(b) + db)
+            };
+            let (c, d) = (c.clamp(0, 0xFFFF), d.clamp(0, 0xFFFF));
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let (x, y) = (label(a, b), label(c as u32, d as u32));
+            let want = sign_exact(i64::from(a) - c, i64::from(b) - d);
+            proptest::prop_assert_eq!(x.key().partial_cmp(&y.key()), Some(want));
+            let isqrt = |v: u64| {
+                let mut r = (v as f64).sqrt() as u64;
+                while r * r > v { r -= 1; }
+                while (r + 1) * (r + 1) <= v { r += 1; }
+                r
+            };
+            let floor = u64::from(a) + isqrt(2 * u64::from(b) * u64::from(b));
+            proptest::prop_assert_eq!(x.bucket() as u64, floor);
+        }
+    }
 
     #[test]
     fn labels_detect_overflow_and_evaluate_exactly() {
