@@ -12,17 +12,26 @@
 //! two ends are also joined through a straight neighbour, and two cells are
 //! in one component exactly when a search from one settles the other.
 
+use petgraph::unionfind::UnionFind;
+
 use crate::OccupancyGrid;
 
 /// Component labels of one grid's traversable cells, recomputed lazily when
 /// the grid's traversable layer changed.
+///
+/// Stored as horizontal *runs* (maximal spans of traversable cells in one
+/// row) joined by union-find: a run touches the runs of the rows above and
+/// below whose column spans overlap it. A map has far fewer runs than
+/// cells, so a recomputation costs one pass over the traversable flags plus
+/// near-constant work per run, and a lookup is a binary search.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Components {
-    /// Per dense index: 0 = not traversable, otherwise the component label.
+    /// Runs `[start, end)` in dense indices, in row-major order.
+    runs: Vec<(u32, u32)>,
+    /// Component label (1-based) of each run.
     labels: Vec<u32>,
-    /// [`OccupancyGrid::trav_version`] the labels were computed for.
+    /// [`OccupancyGrid::trav_version`] the runs were computed for.
     version: Option<u64>,
-    stack: Vec<u32>,
 }
 
 impl Components {
@@ -30,44 +39,68 @@ impl Components {
     /// traversable layer has not changed since the last call).
     ///
     /// # Complexity
-    /// O(N) for N allocated grid cells when the layer changed, O(1)
-    /// otherwise.
+    /// O(N + R α(R)) for N allocated grid cells and R runs when the layer
+    /// changed, O(1) otherwise.
     pub(crate) fn refresh(&mut self, grid: &OccupancyGrid) -> &Self {
-        if self.version == Some(grid.trav_version()) && self.labels.len() == grid.cell_count() {
+        if self.version == Some(grid.trav_version()) {
             return self;
         }
         let trav = grid.trav_layer();
-        let w = grid.dims().0;
-        let n = trav.len();
-        self.labels.clear();
-        self.labels.resize(n, 0);
-        let mut next = 0u32;
-        for start in 0..n {
-            if !trav[start] || self.labels[start] != 0 {
-                continue;
+        let w = grid.dims().0.max(1);
+        self.runs.clear();
+        // Runs of the previous row: indices into `self.runs`.
+        let mut prev = 0..0;
+        let mut links: Vec<(usize, usize)> = Vec::new();
+        for (y, row) in trav.chunks(w).enumerate() {
+            let first = self.runs.len();
+            // Rows are mostly unknown: skip all-false blocks quickly.
+            let mut x = 0;
+            while x < row.len() {
+                if !row[x] {
+                    let skip = row[x..].iter().position(|&t| t).unwrap_or(row.len() - x);
+                    x += skip;
+                    continue;
+                }
+                let len = row[x..].iter().position(|&t| !t).unwrap_or(row.len() - x);
+                // Dense indices fit in u32 (the grid caps width and height at 2^16).
+                #[allow(clippy::cast_possible_truncation)]
+                self.runs
+                    .push(((y * w + x) as u32, (y * w + x + len) as u32));
+                x += len;
             }
-            next += 1;
-            self.labels[start] = next;
-            // Dense indices fit in u32 (the grid caps width and height at 2^16).
-            #[allow(clippy::cast_possible_truncation)]
-            self.stack.push(start as u32);
-            while let Some(i) = self.stack.pop() {
-                let i = i as usize;
-                let x = i % w;
-                let neighbours = [
-                    (x + 1 < w).then(|| i + 1),
-                    (x > 0).then(|| i - 1),
-                    i.checked_add(w).filter(|&j| j < n),
-                    i.checked_sub(w),
-                ];
-                for j in neighbours.into_iter().flatten() {
-                    if trav[j] && self.labels[j] == 0 {
-                        self.labels[j] = next;
-                        #[allow(clippy::cast_possible_truncation)]
-                        self.stack.push(j as u32);
-                    }
+            // 4-connected overlap with the previous row's runs (two pointers).
+            let here = first..self.runs.len();
+            let (mut a, mut b) = (prev.start, here.start);
+            let col = |v: u32| v as usize % w;
+            while a < prev.end && b < here.end {
+                let (pa, pb) = (self.runs[a], self.runs[b]);
+                let (a0, a1) = (col(pa.0), col(pa.1 - 1));
+                let (b0, b1) = (col(pb.0), col(pb.1 - 1));
+                if a0 <= b1 && b0 <= a1 {
+                    links.push((a, b));
+                }
+                if a1 < b1 {
+                    a += 1;
+                } else {
+                    b += 1;
                 }
             }
+            prev = here;
+        }
+        let mut uf = UnionFind::<usize>::new(self.runs.len());
+        for (a, b) in links {
+            uf.union(a, b);
+        }
+        let mut root_label = vec![0u32; self.runs.len()];
+        let mut next = 0u32;
+        self.labels.clear();
+        for r in 0..self.runs.len() {
+            let root = uf.find_mut(r);
+            if root_label[root] == 0 {
+                next += 1;
+                root_label[root] = next;
+            }
+            self.labels.push(root_label[root]);
         }
         self.version = Some(grid.trav_version());
         self
@@ -75,8 +108,16 @@ impl Components {
 
     /// The component of dense index `i` (0 = not traversable or out of
     /// range). Valid after [`refresh`](Self::refresh) on the same grid.
+    ///
+    /// # Complexity
+    /// O(log R) for R runs.
     pub(crate) fn label(&self, i: usize) -> u32 {
-        self.labels.get(i).copied().unwrap_or(0)
+        let Ok(i) = u32::try_from(i) else { return 0 };
+        let k = self.runs.partition_point(|r| r.0 <= i);
+        match k.checked_sub(1) {
+            Some(k) if i < self.runs[k].1 => self.labels[k],
+            _ => 0,
+        }
     }
 }
 
@@ -147,7 +188,7 @@ mod tests {
     fn labels_follow_the_grid_version() {
         let mut g = grid_with_pillars(&[]);
         let mut comp = Components::default();
-        let before = comp.refresh(&g).labels.iter().filter(|&&l| l != 0).count();
+        let before = comp.refresh(&g).runs.len();
         assert!(before > 0);
         // A wall across the room splits it: two components afterwards.
         let cfg = g.config().clone();
@@ -160,8 +201,7 @@ mod tests {
         g.integrate(&Point3::new(0.5, 0.0, z), &wall)
             .expect("integrate");
         comp.refresh(&g);
-        let labels: std::collections::BTreeSet<u32> =
-            comp.labels.iter().copied().filter(|&l| l != 0).collect();
+        let labels: std::collections::BTreeSet<u32> = comp.labels.iter().copied().collect();
         assert!(labels.len() >= 2, "the wall splits the room: {labels:?}");
     }
 }

@@ -83,6 +83,13 @@ pub struct FrontierMap {
     scratch: Scratch,
     #[serde(skip)]
     components: Components,
+    /// Whether some node may lie in another component than others: set
+    /// when a search ends without settling one of its targets, cleared
+    /// when the labels show every node in one component. Only then are the
+    /// component labels maintained (O(N) per change of the traversable
+    /// layer), and the searches skip unreachable targets.
+    #[serde(skip)]
+    islands: bool,
 }
 
 /// Unvalidated deserialised form of [`FrontierMap`].
@@ -139,6 +146,7 @@ impl TryFrom<MapData> for FrontierMap {
             portal_targets: d.portal_targets,
             scratch: Scratch::default(),
             components: Components::default(),
+            islands: false,
         })
     }
 }
@@ -167,6 +175,7 @@ impl FrontierMap {
             portal_targets: std::collections::BTreeMap::new(),
             scratch: Scratch::default(),
             components: Components::default(),
+            islands: false,
         })
     }
 
@@ -405,6 +414,7 @@ impl FrontierMap {
         let res = self.grid.resolution();
         let mut pending = std::mem::take(&mut self.pending);
         let mut stats = RefreshStats::default();
+        let mut saw_islands = false;
         let (level, z) = (self.level, self.cfg.grid.floor_z);
 
         // Anchors.
@@ -549,24 +559,26 @@ impl FrontierMap {
             gained.sort_unstable();
             gained.dedup();
             // Only nodes in a component of a gained cell can gain a path.
-            let comp = self.components.refresh(&self.grid);
-            let mut labels: Vec<u32> = gained.iter().map(|&i| comp.label(i)).collect();
+            let comp = self.islands.then(|| &*self.components.refresh(&self.grid));
+            let label = |i: usize| comp.map_or(1, |c| c.label(i));
+            let mut labels: Vec<u32> = gained.iter().map(|&i| label(i)).collect();
             labels.sort_unstable();
             labels.dedup();
             let targets: Vec<usize> = nodes
                 .iter()
                 .filter_map(|n| self.grid.index(n.1))
-                .filter(|&i| labels.binary_search(&comp.label(i)).is_ok())
+                .filter(|&i| labels.binary_search(&label(i)).is_ok())
                 .collect();
             if !targets.is_empty() && v > 1 {
                 stats.gain_search = true;
                 stats.cells_settled += dijkstra(&self.grid, &mut self.scratch, &gained, &targets);
+                saw_islands |= self.scratch.missed(&targets);
                 let lb: Vec<Option<f64>> = nodes
                     .iter()
                     .map(|n| {
                         self.grid
                             .index(n.1)
-                            .filter(|&i| labels.binary_search(&comp.label(i)).is_ok())
+                            .filter(|&i| labels.binary_search(&label(i)).is_ok())
                             .and_then(|i| self.scratch.settled(i))
                             .map(|d| d * res)
                     })
@@ -622,15 +634,18 @@ impl FrontierMap {
                 continue;
             };
             // Targets in other components have no path: no search for them.
-            let comp = self.components.refresh(&self.grid);
-            let home = comp.label(src);
+            let comp = self.islands.then(|| &*self.components.refresh(&self.grid));
+            let label = |i: usize| comp.map_or(1, |c| c.label(i));
+            let home = label(src);
             let targets: Vec<usize> = row
                 .iter()
                 .filter_map(|&b| self.grid.index(nodes[b].1))
-                .filter(|&t| comp.label(t) == home && home != 0)
+                .filter(|&t| label(t) == home && home != 0)
                 .collect();
-            if !targets.is_empty() {
+            let searched = !targets.is_empty();
+            if searched {
                 stats.cells_settled += dijkstra(&self.grid, &mut self.scratch, &[src], &targets);
+                saw_islands |= self.scratch.missed(&targets);
             }
             for &b in &row {
                 let (idb, cb, db) = nodes[b];
@@ -638,7 +653,7 @@ impl FrontierMap {
                 let found = self
                     .grid
                     .index(cb)
-                    .filter(|&t| comp.label(t) == home && home != 0)
+                    .filter(|&t| searched && label(t) == home && home != 0)
                     .and_then(|t| {
                         let d = self.scratch.settled(t)?;
                         let (path, bbox) = extract_path(&self.grid, &self.scratch, t)?;
@@ -689,6 +704,19 @@ impl FrontierMap {
         pending.full = false;
         self.pending = pending;
         self.last_refresh = stats;
+        self.islands = if self.islands {
+            // Still needed while the nodes span several components.
+            let comp = self.components.refresh(&self.grid);
+            let mut node_labels = nodes
+                .iter()
+                .filter_map(|n| self.grid.index(n.1))
+                .map(|i| comp.label(i))
+                .filter(|&l| l != 0);
+            let first = node_labels.next();
+            node_labels.any(|l| Some(l) != first)
+        } else {
+            saw_islands
+        };
     }
 
     /// Shortest executable path between two world points, each snapped to
@@ -716,11 +744,14 @@ impl FrontierMap {
         let (Some(ia), Some(ib)) = (self.grid.index(a), self.grid.index(b)) else {
             return Ok(None);
         };
-        let comp = self.components.refresh(&self.grid);
-        if comp.label(ia) == 0 || comp.label(ia) != comp.label(ib) {
-            return Ok(None);
+        if self.islands {
+            let comp = self.components.refresh(&self.grid);
+            if comp.label(ia) == 0 || comp.label(ia) != comp.label(ib) {
+                return Ok(None);
+            }
         }
         dijkstra(&self.grid, &mut self.scratch, &[ia], &[ib]);
+        self.islands |= self.scratch.missed(&[ib]);
         let Some(d) = self.scratch.settled(ib) else {
             return Ok(None);
         };

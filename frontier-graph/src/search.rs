@@ -179,6 +179,12 @@ impl Scratch {
         })
     }
 
+    /// Whether the last search left one of `targets` (traversable or not)
+    /// unsettled.
+    pub(crate) fn missed(&self, targets: &[usize]) -> bool {
+        targets.iter().any(|&t| self.settled(t).is_none())
+    }
+
     fn parent(&self, i: usize) -> u8 {
         self.parent[i]
     }
