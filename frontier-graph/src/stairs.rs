@@ -70,7 +70,9 @@ pub struct StairEnd {
     /// partly seen stair.
     pub level: Option<LevelId>,
     /// Where the end is: a point of the level's floor next to the first
-    /// step, or the last walkable step seen.
+    /// step (at the height of the floor surface mapped there, within the
+    /// level tolerance of the level's nominal height), or the last walkable
+    /// step seen.
     pub position: Point3<f64>,
 }
 
