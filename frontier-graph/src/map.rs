@@ -559,7 +559,7 @@ impl FrontierMap {
             gained.sort_unstable();
             gained.dedup();
             // Only nodes in a component of a gained cell can gain a path.
-            let comp = self.islands.then(|| &*self.components.refresh(&self.grid));
+            let comp = self.islands.then(|| self.components.refresh(&self.grid));
             let label = |i: usize| comp.map_or(1, |c| c.label(i));
             let mut labels: Vec<u32> = gained.iter().map(|&i| label(i)).collect();
             labels.sort_unstable();
@@ -634,7 +634,7 @@ impl FrontierMap {
                 continue;
             };
             // Targets in other components have no path: no search for them.
-            let comp = self.islands.then(|| &*self.components.refresh(&self.grid));
+            let comp = self.islands.then(|| self.components.refresh(&self.grid));
             let label = |i: usize| comp.map_or(1, |c| c.label(i));
             let home = label(src);
             let targets: Vec<usize> = row
