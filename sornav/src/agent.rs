@@ -142,6 +142,13 @@ const STAIR_END_REACH: f64 = 0.4;
 /// (two control steps at 2 Hz: time to look at it).
 const LOOK_TIME: Duration = Duration::from_secs(1);
 
+/// How long the robot stands at an open stair end that shows nothing new
+/// before it is excluded: a full turn of the simulator's platform (12
+/// turns of 30 degrees at 2 Hz). The next flight of a switchback stair
+/// starts behind or beside its landing, away from the way the robot came
+/// up, so a platform turns around there.
+const STAIR_LOOK_TIME: Duration = Duration::from_secs(6);
+
 /// The SOR-Nav agent.
 ///
 /// It owns the semantic map, the frontier map (occupancy, frontiers, G_F),
@@ -780,8 +787,12 @@ impl Agent {
                 } else if failed || (reached && !self.short_of_stair_end(id)) {
                     let (n, first) = self.arrivals.entry(id).or_insert((0, outcome.at));
                     *n += 1;
-                    let needed = if stair { STAIR_END_ARRIVALS } else { 2 };
-                    if *n >= needed && outcome.at.saturating_sub(*first) >= LOOK_TIME {
+                    let (needed, look) = if stair {
+                        (STAIR_END_ARRIVALS, STAIR_LOOK_TIME)
+                    } else {
+                        (2, LOOK_TIME)
+                    };
+                    if *n >= needed && outcome.at.saturating_sub(*first) >= look {
                         self.exclude(id);
                     }
                 }
