@@ -466,10 +466,10 @@ impl<F: AgentFactory> SornavPolicy<F> {
         // verified with a level camera).
         self.look_at = look_at.filter(|_| matches!(mission.kind, MissionKind::Explore { .. }));
         self.stair_end = match mission.kind {
-            MissionKind::Explore { frontier } => self
-                .agent
-                .as_ref()
-                .is_some_and(|a| a.frontier_map().is_stair_frontier(sornav::frontier_graph::FrontierId(frontier.0))),
+            MissionKind::Explore { frontier } => self.agent.as_ref().is_some_and(|a| {
+                a.frontier_map()
+                    .is_stair_frontier(sornav::frontier_graph::FrontierId(frontier.0))
+            }),
             _ => false,
         };
         self.follower.set_goal(waypoint, look_at, path, step);
