@@ -286,8 +286,6 @@ pub struct SornavPolicy<F> {
     tilt: f64,
     /// The followed mission's look-at point.
     look_at: Option<Point3<f64>>,
-    /// The followed mission explores an open stair end.
-    stair_end: bool,
     /// Camera mount height (m) and half the vertical field of view (rad).
     mount: f64,
     half_vfov: f64,
@@ -308,10 +306,6 @@ impl<F> std::fmt::Debug for SornavPolicy<F> {
 }
 
 /// To [-pi, pi), 0 if non-finite (not `wrap_angle`: (-pi, pi], keeps NaN).
-/// Within this distance (m, horizontally) of an open stair end's waypoint
-/// the robot turns around instead of approaching further.
-const STAIR_END_TURN_M: f64 = 0.4;
-
 fn wrap(a: f64) -> f64 {
     let t = std::f64::consts::TAU;
     let r = (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI;
@@ -345,7 +339,6 @@ impl<F: AgentFactory> SornavPolicy<F> {
             pitch: 0.0,
             tilt: 30f64.to_radians(),
             look_at: None,
-            stair_end: false,
             mount: 0.88,
             half_vfov: 0.55,
             trace: EpisodeTrace::default(),
@@ -417,7 +410,6 @@ impl<F: AgentFactory> SornavPolicy<F> {
     fn drop_mission(&mut self) {
         self.mission = None;
         self.look_at = None;
-        self.stair_end = false;
         self.follower.clear_goal();
     }
 
@@ -465,13 +457,6 @@ impl<F: AgentFactory> SornavPolicy<F> {
         // Only an explored frontier is looked down at (a candidate is
         // verified with a level camera).
         self.look_at = look_at.filter(|_| matches!(mission.kind, MissionKind::Explore { .. }));
-        self.stair_end = match mission.kind {
-            MissionKind::Explore { frontier } => self.agent.as_ref().is_some_and(|a| {
-                a.frontier_map()
-                    .is_stair_frontier(sornav::frontier_graph::FrontierId(frontier.0))
-            }),
-            _ => false,
-        };
         self.follower.set_goal(waypoint, look_at, path, step);
     }
 
@@ -490,15 +475,9 @@ impl<F: AgentFactory> SornavPolicy<F> {
         if let Some(tilt) = self.stair_tilt(agent, feet) {
             return tilt;
         }
-        // Standing at an open stair end: turn around (the next flight of a
-        // switchback starts behind or beside the landing); the agent
-        // excludes the end after a full turn that showed nothing.
-        if self.stair_end
-            && self.follower.waypoint().is_some_and(|w| {
-                (w.xy() - feet.xy()).norm() < STAIR_END_TURN_M
-                    && (w.z - feet.z).abs() <= agent.config().frontier.grid.step_height
-            })
-        {
+        // Standing at an open stair end: turn around (the agent excludes
+        // the end after a full turn that showed nothing).
+        if agent.at_open_stair_end() {
             return Action::TurnLeft;
         }
         let resolution = agent.config().frontier.grid.resolution;
@@ -605,7 +584,6 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
             / f64::from(camera.width))
         .atan();
         self.look_at = None;
-        self.stair_end = false;
         self.trace = EpisodeTrace::default();
         self.floor_z = episode.start_position.z;
         self.mission = None;

@@ -838,16 +838,39 @@ impl Agent {
     /// (the mission's arrival radius is reached a few steps early on a
     /// stair; only standing at the end shows what lies beyond it).
     fn short_of_stair_end(&self, frontier: FrontierId) -> bool {
+        self.at_stair_end(frontier) == Some(false)
+    }
+
+    /// `Some(whether the robot stands at it)` when `frontier` is an open
+    /// stair end of G_F (within [`STAIR_END_REACH`] horizontally and a step
+    /// height vertically of its viewpoint), `None` otherwise or before the
+    /// first observation.
+    fn at_stair_end(&self, frontier: FrontierId) -> Option<bool> {
         if !self.frontiers.is_stair_frontier(frontier) {
-            return false;
+            return None;
         }
-        let (Some(pose), Some(node)) = (self.pose, self.frontiers.graph().frontier(frontier))
-        else {
-            return false;
-        };
+        let (pose, node) = (self.pose?, self.frontiers.graph().frontier(frontier)?);
         let end = node.viewpoint3();
-        (end.xy() - pose.position.xy()).norm() > STAIR_END_REACH
-            || (end.z - pose.position.z).abs() > self.config.frontier.grid.step_height
+        Some(
+            (end.xy() - pose.position.xy()).norm() <= STAIR_END_REACH
+                && (end.z - pose.position.z).abs() <= self.config.frontier.grid.step_height,
+        )
+    }
+
+    /// Whether the active mission explores an open stair end and the robot
+    /// stands at it: a platform turns around there (the next flight of a
+    /// switchback starts behind or beside its landing); the end is excluded
+    /// after [`STAIR_LOOK_TIME`] if it shows nothing new.
+    pub fn at_open_stair_end(&self) -> bool {
+        match self.executor.active() {
+            Some((_, m)) => match m.kind {
+                MissionKind::Explore { frontier } => {
+                    self.at_stair_end(FrontierId(frontier.0)) == Some(true)
+                }
+                _ => false,
+            },
+            None => false,
+        }
     }
 
     fn decide(
