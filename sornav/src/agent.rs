@@ -860,7 +860,7 @@ impl Agent {
     /// Whether the active mission explores an open stair end and the robot
     /// stands at it: a platform turns around there (the next flight of a
     /// switchback starts behind or beside its landing); the end is excluded
-    /// after [`STAIR_LOOK_TIME`] if it shows nothing new.
+    /// after a full turn (6 s) if it shows nothing new.
     pub fn at_open_stair_end(&self) -> bool {
         match self.executor.active() {
             Some((_, m)) => match m.kind {
