@@ -180,6 +180,10 @@ pub struct GraphConfig {
     /// A robot or home pose on a non-traversable cell (inflated zone, unknown)
     /// is snapped to the nearest traversable cell within this radius (m).
     pub snap_radius: f64,
+    /// Threads for the shortest-path rows of one refresh: 0 (default) uses
+    /// every available core, at most 8; 1 runs them on the calling thread.
+    /// The graph does not depend on it (each row is searched alone).
+    pub search_threads: usize,
 }
 
 impl Default for GraphConfig {
@@ -188,11 +192,22 @@ impl Default for GraphConfig {
             displacement_weight: 0.0,
             home: true,
             snap_radius: 0.5,
+            search_threads: 0,
         }
     }
 }
 
 impl GraphConfig {
+    /// The number of row-search threads [`search_threads`](Self::search_threads)
+    /// asks for on this machine.
+    #[must_use]
+    pub fn row_threads(&self) -> usize {
+        match self.search_threads {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get().min(8)),
+            n => n,
+        }
+    }
+
     /// Checks every value for consistency.
     ///
     /// # Errors
@@ -206,6 +221,11 @@ impl GraphConfig {
         if !self.snap_radius.is_finite() || !(0.0..=10.0).contains(&self.snap_radius) {
             return Err(FrontierError::InvalidConfig(
                 "snap_radius must be in [0, 10] m".into(),
+            ));
+        }
+        if self.search_threads > 256 {
+            return Err(FrontierError::InvalidConfig(
+                "search_threads must be <= 256".into(),
             ));
         }
         Ok(())

@@ -8,7 +8,7 @@ use crate::cell::cell_of;
 use crate::components::Components;
 use crate::frontier::Detector;
 use crate::graph::pair;
-use crate::search::{Scratch, dijkstra, extract_path};
+use crate::search::{ExtractedPath, Scratch, dijkstra, extract_path};
 use crate::{
     AnchorNode, Cell, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMapConfig, LevelId,
     NodeId, OccupancyGrid,
@@ -41,8 +41,9 @@ pub struct RefreshStats {
     pub rows_recomputed: usize,
     /// Whether the lower-bound search from newly traversable cells ran.
     pub gain_search: bool,
-    /// Cells settled by all shortest-path searches of the refresh (the
-    /// refresh's work; targets in another component cost none).
+    /// Cell visits of all shortest-path searches of the refresh (the
+    /// refresh's work, about one per cell a search labels; targets in
+    /// another component cost none).
     #[serde(default)]
     pub cells_settled: usize,
 }
@@ -81,6 +82,9 @@ pub struct FrontierMap {
     portal_targets: std::collections::BTreeMap<u32, Point2<f64>>,
     #[serde(skip)]
     scratch: Scratch,
+    /// Search buffers of the extra row-search threads.
+    #[serde(skip)]
+    spare: Vec<Scratch>,
     #[serde(skip)]
     components: Components,
     /// Whether some node may lie in another component than others: set
@@ -145,6 +149,7 @@ impl TryFrom<MapData> for FrontierMap {
             level: d.level,
             portal_targets: d.portal_targets,
             scratch: Scratch::default(),
+            spare: Vec::new(),
             components: Components::default(),
             islands: false,
         })
@@ -174,6 +179,7 @@ impl FrontierMap {
             level,
             portal_targets: std::collections::BTreeMap::new(),
             scratch: Scratch::default(),
+            spare: Vec::new(),
             components: Components::default(),
             islands: false,
         })
@@ -609,6 +615,7 @@ impl FrontierMap {
         // the principal axis of the node cells: rows processed late then only
         // need targets close by, which early termination exploits.
         let sweep = sweep_rank(&nodes);
+        let mut plan: Vec<RowPlan> = Vec::new();
         while let Some((a, &ca)) = count
             .iter()
             .enumerate()
@@ -626,41 +633,58 @@ impl FrontierMap {
             count[a] = 0;
             stats.rows_recomputed += 1;
             stats.pairs_recomputed += row.len();
-            let (ida, ca_cell, da) = nodes[a];
-            let Some(src) = self.grid.index(ca_cell) else {
-                for &b in &row {
-                    self.graph.edges.remove(&pair(ida, nodes[b].0));
-                }
-                continue;
-            };
-            // Targets in other components have no path: no search for them.
-            let comp = self.islands.then(|| self.components.refresh(&self.grid));
-            let label = |i: usize| comp.map_or(1, |c| c.label(i));
-            let home = label(src);
-            let targets: Vec<usize> = row
-                .iter()
-                .filter_map(|&b| self.grid.index(nodes[b].1))
-                .filter(|&t| label(t) == home && home != 0)
-                .collect();
-            let searched = !targets.is_empty();
-            if searched {
-                stats.cells_settled += dijkstra(&self.grid, &mut self.scratch, &[src], &targets);
-                saw_islands |= self.scratch.missed(&targets);
+            plan.push(RowPlan { source: a, row });
+        }
+        // The rows are independent searches over the same grid: run them
+        // (in parallel when asked), then store their edges in plan order.
+        let comp = self.islands.then(|| self.components.refresh(&self.grid));
+        let threads = self.cfg.graph.row_threads().min(plan.len()).max(1);
+        let results: Vec<RowResult> = if threads == 1 {
+            plan.iter()
+                .map(|r| run_row(&self.grid, comp, &nodes, r, &mut self.scratch))
+                .collect()
+        } else {
+            if self.spare.len() < threads - 1 {
+                self.spare.resize_with(threads - 1, Scratch::default);
             }
-            for &b in &row {
-                let (idb, cb, db) = nodes[b];
+            let (grid, nodes, plan) = (&self.grid, &nodes, &plan);
+            let next = std::sync::atomic::AtomicUsize::new(0);
+            let work = |s: &mut Scratch| {
+                let mut out = Vec::new();
+                loop {
+                    let k = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(r) = plan.get(k) else { break };
+                    out.push((k, run_row(grid, comp, nodes, r, s)));
+                }
+                out
+            };
+            let mut done: Vec<(usize, RowResult)> = std::thread::scope(|sc| {
+                let handles: Vec<_> = self.spare[..threads - 1]
+                    .iter_mut()
+                    .map(|s| sc.spawn(|| work(s)))
+                    .collect();
+                let mut all = work(&mut self.scratch);
+                for h in handles {
+                    match h.join() {
+                        Ok(part) => all.extend(part),
+                        // A worker can only fail by a bug: re-raise it here.
+                        Err(e) => std::panic::resume_unwind(e),
+                    }
+                }
+                all
+            });
+            done.sort_unstable_by_key(|(k, _)| *k);
+            done.into_iter().map(|(_, r)| r).collect()
+        };
+        for (r, result) in plan.iter().zip(results) {
+            stats.cells_settled += result.visits;
+            saw_islands |= result.missed;
+            let (ida, _, da) = nodes[r.source];
+            for (&b, found) in r.row.iter().zip(result.found) {
+                let (idb, _, db) = nodes[b];
                 let key = pair(ida, idb);
-                let found = self
-                    .grid
-                    .index(cb)
-                    .filter(|&t| searched && label(t) == home && home != 0)
-                    .and_then(|t| {
-                        let d = self.scratch.settled(t)?;
-                        let (path, bbox) = extract_path(&self.grid, &self.scratch, t)?;
-                        Some((d * res, path, bbox))
-                    });
                 match found {
-                    Some((length, mut path, bbox)) => {
+                    Some((length, (mut path, bbox))) => {
                         if key.0 != ida {
                             path.reverse();
                         }
@@ -767,6 +791,70 @@ impl FrontierMap {
                 bbox,
             }),
         )
+    }
+}
+
+/// One row of a refresh: the node slot searched from and the node slots
+/// whose edges to it are recomputed.
+struct RowPlan {
+    source: usize,
+    row: Vec<usize>,
+}
+
+/// The outcome of one row: per target slot of its [`RowPlan`], the length
+/// (m) and path of the edge, `None` when there is no path.
+struct RowResult {
+    found: Vec<Option<(f64, ExtractedPath)>>,
+    /// Cell visits of the search.
+    visits: usize,
+    /// Whether the search left a target unsettled (another component).
+    missed: bool,
+}
+
+/// Searches one row: one early-terminating search from the row's source
+/// cell to its targets in the same component (`comp`, when maintained).
+fn run_row(
+    grid: &OccupancyGrid,
+    comp: Option<&Components>,
+    nodes: &[(NodeId, Cell, f64)],
+    r: &RowPlan,
+    s: &mut Scratch,
+) -> RowResult {
+    let res = grid.resolution();
+    let none = || RowResult {
+        found: vec![None; r.row.len()],
+        visits: 0,
+        missed: false,
+    };
+    let Some(src) = grid.index(nodes[r.source].1) else {
+        return none();
+    };
+    // Targets in other components have no path: no search for them.
+    let label = |i: usize| comp.map_or(1, |c| c.label(i));
+    let home = label(src);
+    let index = |b: usize| {
+        grid.index(nodes[b].1)
+            .filter(|&t| label(t) == home && home != 0)
+    };
+    let targets: Vec<usize> = r.row.iter().filter_map(|&b| index(b)).collect();
+    if targets.is_empty() {
+        return none();
+    }
+    let visits = dijkstra(grid, s, &[src], &targets);
+    let missed = s.missed(&targets);
+    let found = r
+        .row
+        .iter()
+        .map(|&b| {
+            let t = index(b)?;
+            let d = s.settled(t)?;
+            Some((d * res, extract_path(grid, s, t)?))
+        })
+        .collect();
+    RowResult {
+        found,
+        visits,
+        missed,
     }
 }
 

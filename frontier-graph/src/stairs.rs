@@ -227,13 +227,154 @@ impl OffLevelColumns {
     }
 }
 
+/// Dense tables of at most this many columns (a 400 m x 400 m box at the
+/// default 0.1 m columns); larger boxes are indexed by a hash map.
+const MAX_DENSE_COLUMNS: i64 = 1 << 24;
+
+/// The walkable surfaces (clearance applied) of the columns around the
+/// off-level ones, computed once per extraction: the step connection looks
+/// at every off-level node's 8 neighbours (and the columns beyond), the
+/// footprint test at a disk around it.
+struct ColumnTable {
+    /// Box of the table (inclusive min, dimensions).
+    min: ColumnKey,
+    dims: (i64, i64),
+    /// Slot of each column of the box (`u32::MAX`: no surface), when the
+    /// box is small enough for a dense array.
+    dense: Vec<u32>,
+    /// Slot of each column, otherwise.
+    sparse: FxHashMap<ColumnKey, u32>,
+    /// Per slot: first index into `zs`, surface count, index of the
+    /// column's first off-level node (`u32::MAX`: none).
+    slots: Vec<(u32, u32, u32)>,
+    zs: Vec<f32>,
+}
+
+impl ColumnTable {
+    /// The columns of `map` within `margin` of an off-level node.
+    ///
+    /// # Complexity
+    /// O(C + B) for C columns in the map and B columns in the box.
+    fn new(map: &SurfaceMap, off: &[(ColumnKey, f32)], clearance: f32, margin: i32) -> Self {
+        let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
+        for &(k, _) in off {
+            lo = (lo.0.min(k.0), lo.1.min(k.1));
+            hi = (hi.0.max(k.0), hi.1.max(k.1));
+        }
+        let m = i64::from(margin);
+        let min = (i64::from(lo.0) - m, i64::from(lo.1) - m);
+        let dims = (
+            (i64::from(hi.0) + m - min.0 + 1).max(0),
+            (i64::from(hi.1) + m - min.1 + 1).max(0),
+        );
+        let dense_ok = dims.0.saturating_mul(dims.1) <= MAX_DENSE_COLUMNS;
+        // Within i32: column keys are bounded by MAX_CELL_COORD, far below
+        // i32::MAX minus any margin.
+        #[allow(clippy::cast_possible_truncation)]
+        let mut t = Self {
+            min: (min.0 as i32, min.1 as i32),
+            dims,
+            dense: Vec::new(),
+            sparse: FxHashMap::default(),
+            slots: Vec::new(),
+            zs: Vec::new(),
+        };
+        if dense_ok {
+            #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+            let n = (dims.0 * dims.1) as usize;
+            t.dense = vec![u32::MAX; n];
+        }
+        for (&k, c) in &map.columns {
+            let Some(i) = t.position(k) else { continue };
+            let start = t.zs.len();
+            t.zs.extend(c.surfaces(clearance));
+            if t.zs.len() == start {
+                continue;
+            }
+            // Counts are bounded by the map's size (below 2^32 columns).
+            #[allow(clippy::cast_possible_truncation)]
+            let slot = (start as u32, (t.zs.len() - start) as u32, u32::MAX);
+            #[allow(clippy::cast_possible_truncation)]
+            let id = t.slots.len() as u32;
+            t.slots.push(slot);
+            match i {
+                Some(i) => t.dense[i] = id,
+                None => {
+                    t.sparse.insert(k, id);
+                }
+            }
+        }
+        // Off-level nodes are listed column by column: the first of each.
+        for (n, &(k, _)) in off.iter().enumerate().rev() {
+            if let Some(id) = t.slot(k) {
+                #[allow(clippy::cast_possible_truncation)]
+                {
+                    t.slots[id].2 = n as u32;
+                }
+            }
+        }
+        t
+    }
+
+    /// `Some(Some(dense index))` or `Some(None)` (sparse) for a column in
+    /// the box, `None` outside it.
+    #[inline]
+    fn position(&self, k: ColumnKey) -> Option<Option<usize>> {
+        let (x, y) = (
+            i64::from(k.0) - i64::from(self.min.0),
+            i64::from(k.1) - i64::from(self.min.1),
+        );
+        if x < 0 || y < 0 || x >= self.dims.0 || y >= self.dims.1 {
+            return None;
+        }
+        if self.dense.is_empty() {
+            return Some(None);
+        }
+        // In the box, whose area fits the dense array.
+        #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
+        Some(Some((y * self.dims.0 + x) as usize))
+    }
+
+    #[inline]
+    fn slot(&self, k: ColumnKey) -> Option<usize> {
+        let id = match self.position(k)? {
+            Some(i) => self.dense[i],
+            None => *self.sparse.get(&k)?,
+        };
+        (id != u32::MAX).then_some(id as usize)
+    }
+
+    /// The surfaces of column `k` (none outside the box).
+    #[inline]
+    fn surfaces(&self, k: ColumnKey) -> &[f32] {
+        self.slot(k).map_or(&[], |id| {
+            let (start, len, _) = self.slots[id];
+            &self.zs[start as usize..(start + len) as usize]
+        })
+    }
+
+    /// The off-level node of surface `z` of column `k`.
+    #[inline]
+    fn off_node(&self, off: &[(ColumnKey, f32)], k: ColumnKey, z: f32) -> Option<usize> {
+        let first = self.slots[self.slot(k)?].2;
+        if first == u32::MAX {
+            return None;
+        }
+        off[first as usize..]
+            .iter()
+            .take_while(|(c, _)| *c == k)
+            .position(|(_, z2)| z2.to_bits() == z.to_bits())
+            .map(|n| first as usize + n)
+    }
+}
+
 /// The surface nodes of the map as the extraction sees them: on a level,
 /// or off-level with an index into the off-level node list.
 struct Nodes<'a> {
-    map: &'a SurfaceMap,
     levels: &'a [f64],
     p: &'a Params,
-    index: FxHashMap<(ColumnKey, u32), usize>,
+    off: &'a [(ColumnKey, f32)],
+    table: ColumnTable,
 }
 
 impl Nodes<'_> {
@@ -242,20 +383,17 @@ impl Nodes<'_> {
     /// or the column two away when the one between holds no surface. One
     /// column lookup per column looked at.
     fn linked(&self, k: ColumnKey) -> impl Iterator<Item = (ColumnKey, f32, Kind)> + '_ {
-        let clearance = self.p.clearance;
         DIRS8.into_iter().flat_map(move |(dx, dy)| {
             let near = (k.0 + dx, k.1 + dy);
-            let column = self.map.columns.get(&near);
-            let (key, column) = if column.is_some_and(|c| c.surfaces(clearance).next().is_some()) {
-                (near, column)
-            } else {
+            let zs = self.table.surfaces(near);
+            let (key, zs) = if zs.is_empty() {
                 let far = (k.0 + 2 * dx, k.1 + 2 * dy);
-                (far, self.map.columns.get(&far))
+                (far, self.table.surfaces(far))
+            } else {
+                (near, zs)
             };
-            column
-                .into_iter()
-                .flat_map(move |c| c.surfaces(clearance))
-                .filter_map(move |z| self.kind(key, z).map(|kind| (key, z, kind)))
+            zs.iter()
+                .filter_map(move |&z| self.kind(key, z).map(|kind| (key, z, kind)))
         })
     }
 
@@ -263,7 +401,7 @@ impl Nodes<'_> {
     fn kind(&self, k: ColumnKey, z: f32) -> Option<Kind> {
         match level_of(z, self.levels, self.p.level_tolerance) {
             Some(l) => Some(Kind::On(l)),
-            None => self.index.get(&(k, z.to_bits())).map(|&i| Kind::Off(i)),
+            None => self.table.off_node(self.off, k, z).map(Kind::Off),
         }
     }
 }
@@ -290,15 +428,17 @@ pub(crate) fn extract(
     if off.is_empty() {
         return Extraction::default();
     }
+    // 3. (below) tests a disk of this radius (columns) around each node.
+    let r = p.radius / res;
+    // Bounded: radius is at most 200 grid cells (GridConfig) and the
+    // surface resolution at least 0.02 m.
+    #[allow(clippy::cast_possible_truncation)]
+    let ri = r.ceil() as i32;
     let nodes = Nodes {
-        map,
         levels,
         p,
-        index: off
-            .iter()
-            .enumerate()
-            .map(|(i, &(k, z))| ((k, z.to_bits()), i))
-            .collect(),
+        off: &off,
+        table: ColumnTable::new(map, &off, p.clearance, ri.max(2)),
     };
     // 2. Components and attachments.
     let mut uf = UnionFind::<usize>::new(off.len());
@@ -326,11 +466,6 @@ pub(crate) fn extract(
         comp_feet.entry(uf.find(f.0)).or_default().push(f);
     }
     // 3. Walkable nodes (footprint supported).
-    let r = p.radius / res;
-    // Bounded: radius is at most 200 grid cells (GridConfig) and the
-    // surface resolution at least 0.02 m.
-    #[allow(clippy::cast_possible_truncation)]
-    let ri = r.ceil() as i32;
     let disk: Vec<(i32, i32)> = (-ri..=ri)
         .flat_map(|dy| (-ri..=ri).map(move |dx| (dx, dy)))
         .filter(|&(dx, dy)| f64::from(dx * dx + dy * dy) <= r * r + 1e-9)
@@ -338,9 +473,9 @@ pub(crate) fn extract(
     let supported = |k: ColumnKey, z: f32| {
         let mut held = 0;
         for &(dx, dy) in &disk {
-            let mut column = map.surfaces((k.0 + dx, k.1 + dy), p.clearance).peekable();
-            if column.peek().is_some() {
-                if !column.any(|z2| (z2 - z).abs() <= 2.0 * p.step) {
+            let column = nodes.table.surfaces((k.0 + dx, k.1 + dy));
+            if !column.is_empty() {
+                if !column.iter().any(|z2| (z2 - z).abs() <= 2.0 * p.step) {
                     return false;
                 }
                 held += 1;
