@@ -620,14 +620,18 @@ impl MultiLevelMap {
         let touched = self.surfaces.take_touched();
         self.off_level
             .update(&self.surfaces, &touched, &floors, &params);
-        let mut found = extract(&self.surfaces, &self.off_level, &floors, &params);
+        if !self.off_level.stale() {
+            // Nothing the last extraction read has changed.
+            return Ok(());
+        }
+        let mut found = extract(&self.surfaces, &mut self.off_level, &floors, &params);
         if !found.new_levels.is_empty() && self.cfg.levels.allow_stairs {
             for h in found.new_levels.clone() {
                 self.add_level(h)?;
             }
             let floors: Vec<f64> = self.levels().map(|l| l.floor_z).collect();
             self.off_level.update(&self.surfaces, &[], &floors, &params);
-            found = extract(&self.surfaces, &self.off_level, &floors, &params);
+            found = extract(&self.surfaces, &mut self.off_level, &floors, &params);
         }
         self.stairs = found.stairs;
         Ok(())

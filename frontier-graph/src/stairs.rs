@@ -181,12 +181,26 @@ pub(crate) struct OffLevelColumns {
     valid_for: Option<(Vec<f64>, f32, f32)>,
     /// The columns, sorted (extraction order is deterministic).
     cols: BTreeSet<ColumnKey>,
+    /// The column table of the last extraction: the columns it read.
+    last: Option<ColumnTable>,
+    /// Whether an extraction may differ from the last one: the set
+    /// changed, or a column the last extraction read received returns.
+    stale: bool,
 }
 
 impl OffLevelColumns {
     /// Forces a recomputation at the next [`update`](Self::update).
     pub(crate) fn invalidate(&mut self) {
         self.valid_for = None;
+        self.stale = true;
+    }
+
+    /// Whether [`extract`] may give another result than last time. When
+    /// not, the last extraction still holds: it reads only the off-level
+    /// columns and the columns within its margin of them, none of which
+    /// changed.
+    pub(crate) fn stale(&self) -> bool {
+        self.stale || self.last.is_none()
     }
 
     /// Brings the set up to date after returns fell in the columns
@@ -209,13 +223,15 @@ impl OffLevelColumns {
             });
         if valid {
             for &k in touched {
-                if has_off_level(map, k, levels, p) {
-                    self.cols.insert(k);
+                let changed = if has_off_level(map, k, levels, p) {
+                    self.cols.insert(k)
                 } else {
-                    self.cols.remove(&k);
-                }
+                    self.cols.remove(&k)
+                };
+                self.stale |= changed || self.last.as_ref().is_none_or(|t| t.covers(k));
             }
         } else {
+            self.stale = true;
             self.cols = map
                 .columns
                 .keys()
@@ -231,16 +247,22 @@ impl OffLevelColumns {
 /// default 0.1 m columns); larger boxes are indexed by a hash map.
 const MAX_DENSE_COLUMNS: i64 = 1 << 24;
 
+/// Table slot of a column without surfaces.
+const NO_SURFACE: u32 = u32::MAX;
+/// Table slot of a column not looked up (never read after construction).
+const UNSEEN: u32 = u32::MAX - 1;
+
 /// The walkable surfaces (clearance applied) of the columns around the
 /// off-level ones, computed once per extraction: the step connection looks
 /// at every off-level node's 8 neighbours (and the columns beyond), the
 /// footprint test at a disk around it.
+#[derive(Debug, Clone)]
 struct ColumnTable {
     /// Box of the table (inclusive min, dimensions).
     min: ColumnKey,
     dims: (i64, i64),
-    /// Slot of each column of the box (`u32::MAX`: no surface), when the
-    /// box is small enough for a dense array.
+    /// Slot of each column of the box ([`NO_SURFACE`], [`UNSEEN`]), when
+    /// the box is small enough for a dense array.
     dense: Vec<u32>,
     /// Slot of each column, otherwise.
     sparse: FxHashMap<ColumnKey, u32>,
@@ -254,7 +276,8 @@ impl ColumnTable {
     /// The columns of `map` within `margin` of an off-level node.
     ///
     /// # Complexity
-    /// O(C + B) for C columns in the map and B columns in the box.
+    /// O(B + N m²) for B columns in the box (dense) and N off-level nodes
+    /// with margin m.
     fn new(map: &SurfaceMap, off: &[(ColumnKey, f32)], clearance: f32, margin: i32) -> Self {
         let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
         for &(k, _) in off {
@@ -282,25 +305,19 @@ impl ColumnTable {
         if dense_ok {
             #[allow(clippy::cast_possible_truncation, clippy::cast_sign_loss)]
             let n = (dims.0 * dims.1) as usize;
-            t.dense = vec![u32::MAX; n];
+            t.dense = vec![UNSEEN; n];
         }
-        for (&k, c) in &map.columns {
-            let Some(i) = t.position(k) else { continue };
-            let start = t.zs.len();
-            t.zs.extend(c.surfaces(clearance));
-            if t.zs.len() == start {
+        // Every column within the margin of an off-level node, looked up
+        // once (the off-level nodes come column by column).
+        let mut last = None;
+        for &(k, _) in off {
+            if last == Some(k) {
                 continue;
             }
-            // Counts are bounded by the map's size (below 2^32 columns).
-            #[allow(clippy::cast_possible_truncation)]
-            let slot = (start as u32, (t.zs.len() - start) as u32, u32::MAX);
-            #[allow(clippy::cast_possible_truncation)]
-            let id = t.slots.len() as u32;
-            t.slots.push(slot);
-            match i {
-                Some(i) => t.dense[i] = id,
-                None => {
-                    t.sparse.insert(k, id);
+            last = Some(k);
+            for dy in -margin..=margin {
+                for dx in -margin..=margin {
+                    t.fill((k.0 + dx, k.1 + dy), map, clearance);
                 }
             }
         }
@@ -314,6 +331,49 @@ impl ColumnTable {
             }
         }
         t
+    }
+
+    /// Looks column `k` up in `map` unless done already.
+    fn fill(&mut self, k: ColumnKey, map: &SurfaceMap, clearance: f32) {
+        let Some(i) = self.position(k) else { return };
+        let seen = match i {
+            Some(i) => self.dense[i] != UNSEEN,
+            None => self.sparse.contains_key(&k),
+        };
+        if seen {
+            return;
+        }
+        let start = self.zs.len();
+        if let Some(c) = map.columns.get(&k) {
+            self.zs.extend(c.surfaces(clearance));
+        }
+        let id = if self.zs.len() == start {
+            NO_SURFACE
+        } else {
+            // Counts are bounded by the map's size (below 2^32 columns).
+            #[allow(clippy::cast_possible_truncation)]
+            let slot = (start as u32, (self.zs.len() - start) as u32, u32::MAX);
+            #[allow(clippy::cast_possible_truncation)]
+            let id = self.slots.len() as u32;
+            self.slots.push(slot);
+            id
+        };
+        match i {
+            Some(i) => self.dense[i] = id,
+            None => {
+                self.sparse.insert(k, id);
+            }
+        }
+    }
+
+    /// Whether column `k` was looked up (lies within the margin of an
+    /// off-level node).
+    fn covers(&self, k: ColumnKey) -> bool {
+        match self.position(k) {
+            Some(Some(i)) => self.dense[i] != UNSEEN,
+            Some(None) => self.sparse.contains_key(&k),
+            None => false,
+        }
     }
 
     /// `Some(Some(dense index))` or `Some(None)` (sparse) for a column in
@@ -341,7 +401,7 @@ impl ColumnTable {
             Some(i) => self.dense[i],
             None => *self.sparse.get(&k)?,
         };
-        (id != u32::MAX).then_some(id as usize)
+        (id < UNSEEN).then_some(id as usize)
     }
 
     /// The surfaces of column `k` (none outside the box).
@@ -411,7 +471,7 @@ impl Nodes<'_> {
 /// date for `levels`).
 pub(crate) fn extract(
     map: &SurfaceMap,
-    off_columns: &OffLevelColumns,
+    off_columns: &mut OffLevelColumns,
     levels: &[f64],
     p: &Params,
 ) -> Extraction {
@@ -425,20 +485,23 @@ pub(crate) fn extract(
             }
         }
     }
-    if off.is_empty() {
-        return Extraction::default();
-    }
     // 3. (below) tests a disk of this radius (columns) around each node.
     let r = p.radius / res;
     // Bounded: radius is at most 200 grid cells (GridConfig) and the
     // surface resolution at least 0.02 m.
     #[allow(clippy::cast_possible_truncation)]
     let ri = r.ceil() as i32;
+    let table = ColumnTable::new(map, &off, p.clearance, ri.max(2));
+    off_columns.stale = false;
+    if off.is_empty() {
+        off_columns.last = Some(table);
+        return Extraction::default();
+    }
     let nodes = Nodes {
         levels,
         p,
         off: &off,
-        table: ColumnTable::new(map, &off, p.clearance, ri.max(2)),
+        table,
     };
     // 2. Components and attachments.
     let mut uf = UnionFind::<usize>::new(off.len());
@@ -547,6 +610,7 @@ pub(crate) fn extract(
                 .flatten(),
         );
     }
+    off_columns.last = Some(nodes.table);
     out.stairs.sort_by(|a, b| {
         (a.lower.position.x, a.lower.position.y, a.lower.position.z)
             .partial_cmp(&(b.lower.position.x, b.lower.position.y, b.lower.position.z))
