@@ -74,17 +74,19 @@
 //!   update touched, re-segment only affected 8-connected components, split
 //!   by PCA, keep ids of unchanged segments.
 //! * Edges: exact 8-connected octile shortest paths without corner cutting,
-//!   by Dijkstra with a bucket queue (Dial 1969) over exact integer labels
+//!   by canonical Dijkstra (Sturtevant & Rabin 2016: only jump points are
+//!   queued, straight runs are labelled by scans) over exact integer labels
 //!   (straight and diagonal move counts), one early-terminating search
-//!   per recomputed row, with sound change tests deciding which pairs to
-//!   recompute (see [`FrontierMap::frontier_graph`]); the result equals a
-//!   rebuild from scratch.
+//!   per recomputed row (rows in parallel, see
+//!   [`GraphConfig::search_threads`]), with sound change tests deciding
+//!   which pairs to recompute (see [`FrontierMap::frontier_graph`]); the
+//!   result equals a rebuild from scratch.
 //!
 //! # Performance
 //! On a 30 m x 30 m house at 0.05 m with 200 frontier nodes (see the crate
 //! README and `examples/bench_frontier_graph.rs`), an incremental update
 //! (scan + frontiers + graph) takes about 2 ms (p50); a full rebuild of all
-//! ~20 000 edges takes about 0.1-0.15 s on one core, versus 2.9 s for a naive
+//! ~20 000 edges takes 25-60 ms on one core, versus 2.9 s for a naive
 //! rebuild (one full Dijkstra per node).
 #![forbid(unsafe_code)]
 #![deny(missing_docs)]
