@@ -416,14 +416,16 @@ impl Comparison {
         std::fs::create_dir_all(&figs).map_err(|e| io(&figs, &e))?;
         let json = out.join("compare.json");
         let text = serde_json::to_string_pretty(self).map_err(|e| io(&json, &e))?;
-        std::fs::write(&json, text).map_err(|e| io(&json, &e))?;
-        crate::figures::paired_difference(&figs.join("paired_difference.png"), self)?;
+        crate::output::write_file(&json, text.as_bytes()).map_err(|e| io(&json, &e))?;
+        crate::output::replace_with(&figs.join("paired_difference.png"), |tmp| {
+            crate::figures::paired_difference(tmp, self)
+        })?;
         let md = out.join("compare.md");
         let text = format!(
             "{}\n![paired differences](figures/paired_difference.png)\n",
             self.markdown()
         );
-        std::fs::write(&md, text).map_err(|e| io(&md, &e))?;
+        crate::output::write_file(&md, text.as_bytes()).map_err(|e| io(&md, &e))?;
         Ok(md)
     }
 }

@@ -12,6 +12,9 @@ pub enum FigureError {
     /// The drawing backend failed (for example, the file cannot be written).
     #[error("drawing failed: {0}")]
     Draw(String),
+    /// The drawn file could not be put in place.
+    #[error(transparent)]
+    Output(#[from] crate::output::OutputError),
 }
 
 impl FigureError {

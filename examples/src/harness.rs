@@ -12,6 +12,7 @@ use std::collections::{BTreeSet, HashSet};
 use std::fs::{File, OpenOptions};
 use std::io::{BufRead, BufReader, Write};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
@@ -27,6 +28,7 @@ use sornav_platform_sim::episodes::{GeneratorConfig, HabitatDataset, generate_ep
 use sornav_platform_sim::{CameraConfig, Episode, Oracle, RunConfig, Simulator, run_episode};
 
 use crate::adapter::{AdapterConfig, ConfigFactory, EpisodeTrace, SornavPolicy};
+use crate::output::{self, OutputError};
 use crate::record::EpisodeRecord;
 use crate::report::{self, ReportError};
 use crate::scenes::{SceneSource, SceneSpecError};
@@ -90,6 +92,33 @@ pub enum HarnessError {
     /// Writing the report failed.
     #[error(transparent)]
     Report(#[from] ReportError),
+    /// The output directory is locked by another run, or a file of it could
+    /// not be written.
+    #[error(transparent)]
+    Output(#[from] OutputError),
+    /// Two episodes of one scene share an episode id (results are keyed
+    /// by variant, scene and episode id).
+    #[error(
+        "episodes of {scene}: episode id '{episode_id}' appears more than once; results are keyed by it, so ids must be unique per scene"
+    )]
+    DuplicateEpisode {
+        /// The scene.
+        scene: String,
+        /// The repeated id.
+        episode_id: String,
+    },
+    /// The settings leave no episode to run.
+    #[error("no episode to run: {0}")]
+    NoEpisodes(String),
+    /// Every episode that was started failed before it could run (for
+    /// example, no navigable start): nothing was recorded.
+    #[error("all {failed} episodes failed to start (first: {first}); nothing was recorded")]
+    AllFailed {
+        /// How many were started.
+        failed: usize,
+        /// The first failure.
+        first: String,
+    },
 }
 
 fn io_err(path: &Path, e: impl std::fmt::Display) -> HarnessError {
@@ -160,6 +189,12 @@ pub struct EvalConfig {
     pub maps: usize,
 }
 
+/// Most parallel jobs a run accepts ([`RunOptions::jobs`]): each job is a
+/// thread with its own simulator state, and far more threads than cores only
+/// add memory and contention (`--jobs 100000` spawned thousands of threads
+/// and never progressed).
+pub const MAX_JOBS: usize = 256;
+
 /// How to run an evaluation (not part of its results).
 #[derive(Debug, Clone)]
 pub struct RunOptions {
@@ -173,6 +208,33 @@ pub struct RunOptions {
     pub fresh: bool,
     /// Show a progress bar.
     pub progress: bool,
+    /// Set (for example by a SIGINT handler) to stop: episodes not yet
+    /// started are not started, the ones running finish and are recorded,
+    /// and the report of what finished is written
+    /// ([`RunOutcome::interrupted`]).
+    pub stop: Option<Arc<AtomicBool>>,
+}
+
+impl RunOptions {
+    /// Checks the options.
+    ///
+    /// # Errors
+    /// [`HarnessError::Config`] for `jobs` outside `1..=`[`MAX_JOBS`] or a
+    /// shard `i/n` without `i < n`.
+    pub fn validate(&self) -> Result<(), HarnessError> {
+        if !(1..=MAX_JOBS).contains(&self.jobs) {
+            return Err(HarnessError::Config(format!(
+                "jobs = {}: need 1 to {MAX_JOBS} (MAX_JOBS)",
+                self.jobs
+            )));
+        }
+        if let Some((i, n)) = self.shard
+            && (n == 0 || i >= n)
+        {
+            return Err(HarnessError::Config(format!("shard {i}/{n}: need i < n")));
+        }
+        Ok(())
+    }
 }
 
 /// What a run did.
@@ -182,8 +244,15 @@ pub struct RunOutcome {
     pub items: usize,
     /// Items already done before this run (resume).
     pub skipped: usize,
-    /// Items run now.
+    /// Items run and recorded now.
     pub ran: usize,
+    /// Items that failed to start (logged, not recorded).
+    pub failed: usize,
+    /// Items not started because the run was stopped
+    /// ([`RunOptions::stop`]); run again to resume them.
+    pub not_started: usize,
+    /// Whether the run was stopped before every item was started.
+    pub interrupted: bool,
     /// Wall time of this run (s).
     pub wall_s: f64,
     /// The report.
@@ -243,6 +312,9 @@ impl EvalConfig {
         self.camera
             .validate()
             .map_err(|e| HarnessError::Config(format!("camera: {e}")))?;
+        self.run
+            .validate()
+            .map_err(|e| HarnessError::Config(format!("episode rules: {e}")))?;
         for v in &self.variants {
             if let Some(variant) = Variant::from_name(v)
                 && variant != Variant::Oracle
@@ -483,7 +555,7 @@ fn check_run_file(dir: &Path, config: &EvalConfig, fresh: bool) -> Result<(), Ha
         return Ok(());
     }
     let text = serde_json::to_string_pretty(config).map_err(|e| io_err(&path, e))?;
-    std::fs::write(&path, text).map_err(|e| io_err(&path, e))
+    Ok(output::write_file(&path, text.as_bytes())?)
 }
 
 /// The transport of the LLM policy (HTTP, recording or replay).
@@ -609,19 +681,28 @@ fn safe(s: &str) -> String {
 
 /// Runs (or resumes) an evaluation and writes its outputs.
 ///
+/// The output directory is locked for the run ([`output::lock_dir`]);
+/// `run.json` and the report are replaced atomically. The first failure to
+/// write a record stops the run: no further episode is started, and the
+/// error is returned. When [`RunOptions::stop`] is set, episodes not yet
+/// started are left for a later run (resume), the running ones finish and
+/// are recorded, and the report covers what finished.
+///
 /// # Errors
-/// [`HarnessError`] for invalid settings, unloadable scenes, a different
-/// evaluation already in `out`, and I/O failures. A single episode that
-/// fails to start (no navigable start) is logged and skipped, not fatal.
+/// [`HarnessError`] for invalid settings or options, a locked output
+/// directory, unloadable scenes, duplicate episode ids in a scene, settings
+/// that leave no episode ([`HarnessError::NoEpisodes`]), a different
+/// evaluation already in `out`, every started episode failing to start
+/// ([`HarnessError::AllFailed`]), and I/O failures. A single episode that
+/// fails to start (no navigable start) is logged, counted in
+/// [`RunOutcome::failed`] and skipped.
 pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, HarnessError> {
     config.validate()?;
-    if let Some((i, n)) = options.shard
-        && (n == 0 || i >= n)
-    {
-        return Err(HarnessError::Config(format!("shard {i}/{n}: need i < n")));
-    }
+    options.validate()?;
     let t0 = Instant::now();
     std::fs::create_dir_all(&options.out).map_err(|e| io_err(&options.out, e))?;
+    // One writer per output directory, held until the report is written.
+    let _lock = output::lock_dir(&options.out)?;
     check_run_file(&options.out, config, options.fresh)?;
     let jsonl = options.out.join("episodes.jsonl");
     let done: HashSet<(String, String, String)> = read_records(&jsonl)?
@@ -657,6 +738,29 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             })
             .collect::<Result<Vec<_>, HarnessError>>()
     })?;
+    for scene in &scenes {
+        let mut ids = HashSet::new();
+        if let Some(e) = scene.episodes.iter().find(|e| !ids.insert(&e.episode_id)) {
+            return Err(HarnessError::DuplicateEpisode {
+                scene: scene.name.clone(),
+                episode_id: e.episode_id.clone(),
+            });
+        }
+    }
+    let with_episodes: HashSet<&str> = scenes
+        .iter()
+        .flat_map(|s| s.episodes.iter().map(|e| e.object_category.as_str()))
+        .collect();
+    if with_episodes.is_empty() {
+        return Err(HarnessError::NoEpisodes(no_episode_reason(
+            config, &scenes, &from_file,
+        )));
+    }
+    for c in &config.categories {
+        if !with_episodes.contains(c.as_str()) {
+            tracing::warn!("target category '{c}' has no episode in any scene (misspelt?)");
+        }
+    }
 
     // Work items, in a fixed order; then the shard; then resume.
     let mut items = Vec::new();
@@ -737,12 +841,28 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
     } else {
         ProgressBar::hidden()
     };
-    let successes = std::sync::atomic::AtomicUsize::new(0);
-    let finished = std::sync::atomic::AtomicUsize::new(0);
+    let successes = AtomicUsize::new(0);
+    let finished = AtomicUsize::new(0);
     let write_error: Mutex<Option<HarnessError>> = Mutex::new(None);
+    // Set at the first write error: nothing more is started.
+    let write_failed = AtomicBool::new(false);
+    let stop_requested = || {
+        options
+            .stop
+            .as_ref()
+            .is_some_and(|s| s.load(Ordering::Relaxed))
+    };
+    let not_started = AtomicUsize::new(0);
+    let failed = AtomicUsize::new(0);
+    let first_failure: Mutex<Option<String>> = Mutex::new(None);
 
     pool.install(|| {
         items.par_iter().for_each(|w| {
+            if write_failed.load(Ordering::Relaxed) || stop_requested() {
+                not_started.fetch_add(1, Ordering::Relaxed);
+                bar.inc(1);
+                return;
+            }
             let scene = &scenes[w.scene];
             let episode = &scene.episodes[w.episode];
             let variant = &config.variants[w.variant];
@@ -758,7 +878,13 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             let result = match result {
                 Ok(r) => r,
                 Err(e) => {
-                    tracing::warn!("{variant} {} #{}: {e}", scene.name, episode.episode_id);
+                    let message = format!("{variant} {} #{}: {e}", scene.name, episode.episode_id);
+                    tracing::warn!("{message}");
+                    failed.fetch_add(1, Ordering::Relaxed);
+                    first_failure
+                        .lock()
+                        .unwrap_or_else(std::sync::PoisonError::into_inner)
+                        .get_or_insert(message);
                     bar.inc(1);
                     return;
                 }
@@ -767,7 +893,7 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             // Every relocating episode counts toward the `config.maps`
             // relocation maps, even one that gets a map anyway.
             let relocated = trace.as_ref().is_some_and(|t| !t.relocations.is_empty())
-                && relocation_maps.fetch_add(1, std::sync::atomic::Ordering::Relaxed) < config.maps;
+                && relocation_maps.fetch_add(1, Ordering::Relaxed) < config.maps;
             let want_map = map_episodes.contains(&(w.scene, w.episode)) || relocated;
             // The agent's end state and the full trace only for a map.
             let snapshot = policy
@@ -792,7 +918,7 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
                     safe(&scene.name),
                     safe(&episode.episode_id)
                 ));
-                if let Err(e) = map.save_png(&path, 720) {
+                if let Err(e) = output::replace_with(&path, |tmp| map.save_png(tmp, 720)) {
                     tracing::warn!("map {}: {e}", path.display());
                 }
             }
@@ -807,16 +933,15 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             });
             drop(guard);
             if let Err(e) = written {
+                write_failed.store(true, Ordering::Relaxed);
                 let mut slot = write_error
                     .lock()
                     .unwrap_or_else(std::sync::PoisonError::into_inner);
                 slot.get_or_insert(e);
             }
-            let s = successes.fetch_add(
-                usize::from(record.result.success),
-                std::sync::atomic::Ordering::Relaxed,
-            ) + usize::from(record.result.success);
-            let f = finished.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+            let s = successes.fetch_add(usize::from(record.result.success), Ordering::Relaxed)
+                + usize::from(record.result.success);
+            let f = finished.fetch_add(1, Ordering::Relaxed) + 1;
             bar.set_message(format!("SR {:.2}", s as f64 / f as f64));
             bar.inc(1);
         });
@@ -828,7 +953,17 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
     {
         return Err(e);
     }
-    let ran = items.len();
+    let (failed, not_started) = (failed.into_inner(), not_started.into_inner());
+    let ran = items.len() - failed - not_started;
+    if ran == 0 && failed > 0 && not_started == 0 {
+        return Err(HarnessError::AllFailed {
+            failed,
+            first: first_failure
+                .into_inner()
+                .unwrap_or_else(std::sync::PoisonError::into_inner)
+                .unwrap_or_default(),
+        });
+    }
     let wall_s = t0.elapsed().as_secs_f64();
     let records = read_records(&jsonl)?;
     let report = report::write(&options.out, config, &records, Some(wall_s))?;
@@ -836,9 +971,48 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
         items: total,
         skipped,
         ran,
+        failed,
+        not_started,
+        interrupted: not_started > 0,
         wall_s,
         report,
     })
+}
+
+/// Why the settings leave no episode at all, for [`HarnessError::NoEpisodes`].
+fn no_episode_reason(config: &EvalConfig, scenes: &[LoadedScene], from_file: &[Episode]) -> String {
+    let categories = config.categories.join(", ");
+    let names: Vec<&str> = scenes.iter().map(|s| s.name.as_str()).collect();
+    match &config.episodes {
+        EpisodeSource::File { path } if from_file.is_empty() => {
+            format!("the episode file {} holds no episodes", path.display())
+        }
+        EpisodeSource::File { path } => {
+            let matching = from_file.iter().any(|e| {
+                names.iter().any(|n| {
+                    sornav_platform_sim::episodes::habitat::scene_stem(&e.scene_id) == *n
+                        || e.scene_id == *n
+                })
+            });
+            if matching {
+                format!(
+                    "no episode of {} for the scenes has a target category among [{categories}] (misspelt --categories?)",
+                    path.display()
+                )
+            } else {
+                format!(
+                    "no episode of {} names a loaded scene (its scene ids look like '{}'; the scenes are [{}])",
+                    path.display(),
+                    from_file[0].scene_id,
+                    names.join(", ")
+                )
+            }
+        }
+        EpisodeSource::Generate { .. } => format!(
+            "no scene has a reachable instance of the target categories [{categories}] (misspelt --categories? the ObjectNav categories of HM3D are {})",
+            sornav_platform_sim::category::HM3D_GOALS.join(", ")
+        ),
+    }
 }
 
 /// Merges the output directories of shards of one evaluation into `out`:
@@ -874,6 +1048,7 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<PathBuf, HarnessError> {
     }
     let config = config.ok_or_else(|| HarnessError::Config("no shard".into()))?;
     std::fs::create_dir_all(out).map_err(|e| io_err(out, e))?;
+    let _lock = output::lock_dir(out)?;
     check_run_file(out, &config, false)?;
     // Keep what `out` already holds too (merging into one of the shards).
     let jsonl = out.join("episodes.jsonl");

@@ -10,6 +10,7 @@
 //! * [`record`], [`summary`], [`report`], [`figures`], [`topdown`]: the
 //!   outputs (`episodes.jsonl`, `summary.json`, `report.md`, PNG figures
 //!   and top-down maps).
+//! * [`output`]: the output directory's lock and atomic file writes.
 //! * [`compare`]: the paired comparison of two runs (`sornav-sim compare`).
 //! * [`ros`]: the start-up shared by the ROS 2 binaries `sornav-robot` and
 //!   `sornav-simbot` (logging, Ctrl-C).
@@ -25,6 +26,7 @@ pub mod decision_log;
 pub mod figures;
 pub mod harness;
 pub mod histogram;
+pub mod output;
 pub mod record;
 pub mod report;
 pub mod ros;

@@ -9,6 +9,7 @@ use serde::Serialize;
 
 use crate::figures::{self, FigureError};
 use crate::harness::EvalConfig;
+use crate::output::{self, OutputError};
 use crate::record::EpisodeRecord;
 use crate::summary::{DISTANCE_BINS, FLOOR_BINS, VariantSummary, summarize};
 
@@ -26,6 +27,9 @@ pub enum ReportError {
     /// A figure could not be drawn.
     #[error(transparent)]
     Figure(#[from] FigureError),
+    /// A file could not be written (atomically: the old one is kept).
+    #[error(transparent)]
+    Output(#[from] OutputError),
 }
 
 fn io(path: &Path, e: impl std::fmt::Display) -> ReportError {
@@ -56,8 +60,8 @@ fn pct(x: f64) -> String {
     format!("{:.1}", 100.0 * x)
 }
 
-/// Writes `summary.json`, `report.md` and the figures into `dir`; returns
-/// the report's path.
+/// Writes `summary.json`, `report.md` and the figures into `dir`, each
+/// atomically (see [`crate::output`]); returns the report's path.
 ///
 /// # Errors
 /// [`ReportError`] for I/O and drawing failures.
@@ -86,16 +90,19 @@ pub fn write(
     };
     let path = dir.join("summary.json");
     let text = serde_json::to_string_pretty(&summary).map_err(|e| io(&path, e))?;
-    std::fs::write(&path, text).map_err(|e| io(&path, e))?;
+    output::write_file(&path, text.as_bytes())?;
 
     let figs = dir.join("figures");
     std::fs::create_dir_all(&figs).map_err(|e| io(&figs, e))?;
     let mut drawn = Vec::new();
     if !summaries.is_empty() {
-        figures::metrics_bars(&figs.join("metrics.png"), &summaries)?;
-        figures::success_by_distance(&figs.join("success_by_distance.png"), &summaries)?;
-        figures::failure_composition(&figs.join("failures.png"), &summaries)?;
-        figures::success_by_floors(&figs.join("success_by_floors.png"), &summaries)?;
+        let draw = |name: &str, figure: fn(&Path, &[VariantSummary]) -> Result<(), FigureError>| {
+            output::replace_with(&figs.join(name), |tmp| figure(tmp, &summaries))
+        };
+        draw("metrics.png", figures::metrics_bars)?;
+        draw("success_by_distance.png", figures::success_by_distance)?;
+        draw("failures.png", figures::failure_composition)?;
+        draw("success_by_floors.png", figures::success_by_floors)?;
         drawn.extend([
             "metrics.png",
             "success_by_distance.png",
@@ -106,7 +113,7 @@ pub fn write(
 
     let md = markdown(config, records, &summaries, run_wall_s, &drawn, dir);
     let path = dir.join("report.md");
-    std::fs::write(&path, md).map_err(|e| io(&path, e))?;
+    output::write_file(&path, md.as_bytes())?;
     Ok(path)
 }
 

@@ -4,16 +4,28 @@
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
-/// Logs `tracing` events to stderr, filtered by `RUST_LOG` (default
-/// `info`).
+/// The log filter when `RUST_LOG` is not set: `info`, but RustDDS at
+/// `warn` (with reliable cloud publishers it logs about 7,100
+/// "HeartbeatFrag handling not implemented" lines a minute at `info`) and
+/// ros2-client's check of `ROS_DISTRO` at `error` (no ROS install is needed,
+/// so "ROS_DISTRO is not set" is no news).
+pub const DEFAULT_LOG_FILTER: &str = "info,rustdds=warn,ros2_client::distributions=error";
+
+/// The log filter: `RUST_LOG` when set (and valid), else
+/// [`DEFAULT_LOG_FILTER`].
+pub fn log_filter() -> tracing_subscriber::EnvFilter {
+    tracing_subscriber::EnvFilter::try_from_default_env()
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(DEFAULT_LOG_FILTER))
+}
+
+/// Logs `tracing` events (and the `log` records of RustDDS and ros2-client)
+/// to stderr, filtered by [`log_filter`].
 ///
 /// # Panics
 /// When a global subscriber is already installed (call it once, first).
 pub fn init_logging() {
     tracing_subscriber::fmt()
-        .with_env_filter(
-            tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
-        )
+        .with_env_filter(log_filter())
         .with_writer(std::io::stderr)
         .init();
 }
@@ -28,4 +40,52 @@ pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
     let flag = Arc::clone(&stop);
     ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))?;
     Ok(stop)
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::{Arc, Mutex};
+
+    use tracing_subscriber::layer::SubscriberExt;
+
+    use super::DEFAULT_LOG_FILTER;
+
+    /// Issue 21: the default filter keeps RustDDS at warn and our own
+    /// crates at info.
+    #[test]
+    fn default_filter_keeps_rustdds_at_warn() {
+        #[derive(Clone, Default)]
+        struct Sink(Arc<Mutex<Vec<u8>>>);
+        impl std::io::Write for Sink {
+            fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+                self.0.lock().unwrap().extend_from_slice(b);
+                Ok(b.len())
+            }
+            fn flush(&mut self) -> std::io::Result<()> {
+                Ok(())
+            }
+        }
+        let sink = Sink::default();
+        let writer = sink.clone();
+        let subscriber = tracing_subscriber::registry()
+            .with(tracing_subscriber::EnvFilter::new(DEFAULT_LOG_FILTER))
+            .with(
+                tracing_subscriber::fmt::layer()
+                    .with_ansi(false)
+                    .with_writer(move || writer.clone()),
+            );
+        tracing::subscriber::with_default(subscriber, || {
+            tracing::info!(target: "rustdds::rtps::reader", "HeartbeatFrag handling not implemented");
+            tracing::warn!(target: "rustdds::rtps::writer", "dds warning kept");
+            tracing::warn!(target: "ros2_client::distributions", "ROS_DISTRO is not set");
+            tracing::info!(target: "sornav_platform_scout::bridge", "bridge info kept");
+        });
+        let text = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+        assert!(!text.contains("HeartbeatFrag"), "{text}");
+        assert!(!text.contains("ROS_DISTRO"), "{text}");
+        assert!(
+            text.contains("dds warning kept") && text.contains("bridge info kept"),
+            "{text}"
+        );
+    }
 }

@@ -335,6 +335,13 @@ fn cli_arguments() {
         vec!["--shard", "3/2"],
         vec!["--scenes", "procedural:zero"],
         vec!["--llm-replay", "x.jsonl"],
+        // issue 21: rules under which nothing runs, and thread counts that
+        // never progressed
+        vec!["--max-actions", "0"],
+        vec!["--wall-clock", "0"],
+        vec!["--wall-clock", "nan"],
+        vec!["--jobs", "100000"],
+        vec!["--jobs", "0"],
     ] {
         let out = std::process::Command::new(exe)
             .args(&bad)

@@ -39,7 +39,7 @@
 //!   Scout driver's `Twist`, clamped to the configured speed limits, with a
 //!   watchdog that sends one zero twist when commands stop.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::time::Duration;
 
 use nalgebra::{Isometry3, Point3, Translation3};
@@ -78,8 +78,10 @@ pub enum Outgoing {
     CmdVel(Twist),
 }
 
-/// Errors of the bridge's inputs. Each is also counted in [`BridgeStats`]
-/// and reported as `last_error` in the status; none stops the node.
+/// Errors of the bridge's inputs. Each rejection is counted in
+/// [`BridgeStats`] and by cause in [`Status::rejections`], logged at warn
+/// (at most once per [`REJECTION_WARN_INTERVAL`] and cause) and reported as
+/// `last_error` in the status; none stops the node.
 #[derive(Debug, thiserror::Error)]
 pub enum BridgeError {
     /// The configuration is invalid.
@@ -116,6 +118,25 @@ pub enum BridgeError {
     /// The agent refused something (unknown target, bad observation, ...).
     #[error(transparent)]
     Agent(#[from] AgentError),
+}
+
+impl BridgeError {
+    /// A short stable name of the error's kind (with the topic where it
+    /// has one), under which rejections are counted in
+    /// [`Status::rejections`]: `frame:<topic>`, `cloud:<topic>`,
+    /// `bad_odometry`, `no_odometry:<topic>`, `blank_target`, `agent`,
+    /// `config`.
+    pub fn cause(&self) -> String {
+        match self {
+            BridgeError::Config(_) => "config".into(),
+            BridgeError::Cloud { topic, .. } => format!("cloud:{topic}"),
+            BridgeError::Frame { topic, .. } => format!("frame:{topic}"),
+            BridgeError::BadOdometry => "bad_odometry".into(),
+            BridgeError::NoOdometry(topic) => format!("no_odometry:{topic}"),
+            BridgeError::BlankTarget => "blank_target".into(),
+            BridgeError::Agent(_) => "agent".into(),
+        }
+    }
 }
 
 /// What the node is doing.
@@ -158,8 +179,13 @@ pub struct BridgeStats {
     /// Terrain maps used.
     pub terrain_maps: u64,
     /// Messages rejected (malformed cloud, wrong frame, bad odometry, blank
-    /// or unknown request).
+    /// or unknown request); by cause in [`Status::rejections`].
     pub rejected_messages: u64,
+    /// Samples that failed to decode before reaching the bridge (for
+    /// example a truncated `Odometry`), reported by the node through
+    /// [`Bridge::on_undecodable`].
+    #[serde(default)]
+    pub undecodable_samples: u64,
     /// Clouds dropped because no odometry had arrived yet (no sensor origin
     /// to carve free space from): a start-up race between topics, not a
     /// malformed message, so not counted in `rejected_messages`.
@@ -167,8 +193,13 @@ pub struct BridgeStats {
     pub clouds_before_odometry: u64,
     /// Cloud points skipped (non-finite coordinate or bad label).
     pub skipped_points: u64,
-    /// Buffered points dropped by the per-observation cap.
+    /// Buffered points dropped by the per-observation cap (whole older
+    /// clouds).
     pub dropped_points: u64,
+    /// Points thinned out (by a stride) of a single cloud above the
+    /// per-observation cap.
+    #[serde(default)]
+    pub thinned_points: u64,
     /// Observations given to the agent (a labelled cloud and an
     /// occupancy-only frame count as two).
     pub observations: u64,
@@ -252,6 +283,10 @@ pub struct Status {
     pub bridge: BridgeStats,
     /// The last input error.
     pub last_error: Option<String>,
+    /// Rejected messages and undecodable samples by cause
+    /// ([`BridgeError::cause`], `undecodable:<topic>`), since the start.
+    #[serde(default)]
+    pub rejections: BTreeMap<String, u64>,
     /// In `floor_exhausted`: where each stair leading to an unexplored
     /// floor starts on the robot's floor (map frame, m), nearest first;
     /// empty otherwise.
@@ -313,7 +348,23 @@ pub struct Bridge {
     note: Option<String>,
     stats: BridgeStats,
     last_error: Option<String>,
+    /// Rejections by cause ([`BridgeError::cause`]).
+    rejections: BTreeMap<String, Rejections>,
 }
+
+/// Rejections of one cause, and their rate-limited warning.
+#[derive(Debug, Clone, Copy, Default)]
+struct Rejections {
+    count: u64,
+    last_warn: Option<Duration>,
+    /// Rejections since the last warning, not logged.
+    suppressed: u64,
+}
+
+/// Least time between two warnings of one rejection cause: a burst of bad
+/// messages logs one line per cause and interval, and the status counts
+/// every one ([`Status::rejections`]).
+pub const REJECTION_WARN_INTERVAL: Duration = Duration::from_secs(5);
 
 impl std::fmt::Debug for Bridge {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -360,6 +411,7 @@ impl Bridge {
             note: None,
             stats: BridgeStats::default(),
             last_error: None,
+            rejections: BTreeMap::new(),
         })
     }
 
@@ -432,14 +484,52 @@ impl Bridge {
         out
     }
 
-    fn reject(&mut self, e: BridgeError) -> BridgeError {
-        tracing::debug!(error = %e, "message rejected");
+    fn reject(&mut self, e: BridgeError, now: Duration) -> BridgeError {
         self.stats.rejected_messages += 1;
-        self.last_error = Some(e.to_string());
+        let message = e.to_string();
+        self.note_rejection(e.cause(), &message, now);
+        self.last_error = Some(message);
         e
     }
 
-    fn check_frame(&mut self, topic: &'static str, header: &Header) -> Result<(), BridgeError> {
+    /// Counts a rejection under `cause` and logs it at warn, at most once
+    /// per [`REJECTION_WARN_INTERVAL`] and cause (with the number of
+    /// rejections of that cause not logged since the last warning).
+    fn note_rejection(&mut self, cause: String, message: &str, now: Duration) {
+        let r = self.rejections.entry(cause).or_default();
+        r.count += 1;
+        if r.last_warn
+            .is_none_or(|t| now.saturating_sub(t) >= REJECTION_WARN_INTERVAL)
+        {
+            tracing::warn!(
+                total = r.count,
+                not_logged = r.suppressed,
+                "message rejected: {message}"
+            );
+            r.last_warn = Some(now);
+            r.suppressed = 0;
+        } else {
+            r.suppressed += 1;
+        }
+    }
+
+    /// A sample on `topic` that failed to decode (CDR) before reaching the
+    /// bridge: counted in [`BridgeStats::undecodable_samples`] and under the
+    /// cause `undecodable:<topic>`, logged like a rejection, and reported
+    /// as `last_error`.
+    pub fn on_undecodable(&mut self, topic: &'static str, error: &str, now: Duration) {
+        self.stats.undecodable_samples += 1;
+        let message = format!("{topic}: a sample failed to decode: {error}");
+        self.note_rejection(format!("undecodable:{topic}"), &message, now);
+        self.last_error = Some(message);
+    }
+
+    fn check_frame(
+        &mut self,
+        topic: &'static str,
+        header: &Header,
+        now: Duration,
+    ) -> Result<(), BridgeError> {
         let expected = &self.config.ros.map_frame;
         if !header.frame_id.is_empty() && header.frame_id.trim_start_matches('/') != expected {
             let e = BridgeError::Frame {
@@ -447,7 +537,7 @@ impl Bridge {
                 expected: expected.clone(),
                 got: header.frame_id.clone(),
             };
-            return Err(self.reject(e));
+            return Err(self.reject(e, now));
         }
         Ok(())
     }
@@ -458,13 +548,13 @@ impl Bridge {
     /// [`BridgeError::Frame`], [`BridgeError::BadOdometry`] (counted; the
     /// pose is not used).
     pub fn on_odometry(&mut self, msg: &Odometry, now: Duration) -> Result<(), BridgeError> {
-        self.check_frame("odometry", &msg.header)?;
+        self.check_frame("odometry", &msg.header, now)?;
         let p = msg.pose.pose.position;
         let Some(q) = msg.pose.pose.orientation.to_unit() else {
-            return Err(self.reject(BridgeError::BadOdometry));
+            return Err(self.reject(BridgeError::BadOdometry, now));
         };
         if ![p.x, p.y, p.z].iter().all(|c| c.is_finite()) {
-            return Err(self.reject(BridgeError::BadOdometry));
+            return Err(self.reject(BridgeError::BadOdometry, now));
         }
         let odom = Isometry3::from_parts(Translation3::new(p.x, p.y, p.z), q);
         let lidar = self.config.sensors.lidar.isometry();
@@ -524,29 +614,49 @@ impl Bridge {
         })
     }
 
+    /// Keeps the buffered points within `inputs.max_points_per_observation`:
+    /// drops the oldest cloud of the larger buffer while it holds several,
+    /// and thins a buffer's single cloud by a stride (every k-th point)
+    /// instead of dropping it, so that one cloud above the cap still
+    /// reaches the agent, spread over its whole extent.
     fn trim_buffers(&mut self) {
         let cap = self.config.inputs.max_points_per_observation;
-        let mut l: usize = self.labelled.iter().map(Vec::len).sum();
-        let mut u: usize = self.unlabelled.iter().map(Vec::len).sum();
-        while l + u > cap {
-            // Drop the oldest cloud of the larger buffer (never empty: its
-            // total is positive). Empty clouds (every point skipped) are
-            // dropped like any other.
-            let from_labelled = l >= u;
-            let dropped = if from_labelled {
-                self.labelled.pop_front().map(|c| c.len())
-            } else {
-                self.unlabelled.pop_front().map(|c| c.len())
-            };
-            let Some(n) = dropped else {
+        loop {
+            let l: usize = self.labelled.iter().map(Vec::len).sum();
+            let u: usize = self.unlabelled.iter().map(Vec::len).sum();
+            if l + u <= cap {
                 break;
-            };
-            if from_labelled {
-                l -= n;
-            } else {
-                u -= n;
             }
-            self.stats.dropped_points += n as u64;
+            let excess = l + u - cap;
+            let from_labelled = l >= u;
+            let clouds = if from_labelled {
+                self.labelled.len()
+            } else {
+                self.unlabelled.len()
+            };
+            if clouds > 1 {
+                // Drop the oldest cloud of the larger buffer. Empty clouds
+                // (every point skipped) are dropped like any other.
+                let n = if from_labelled {
+                    self.labelled.pop_front().map_or(0, |c| c.len())
+                } else {
+                    self.unlabelled.pop_front().map_or(0, |c| c.len())
+                };
+                self.stats.dropped_points += n as u64;
+                continue;
+            }
+            // The larger buffer holds one cloud (of at least half the
+            // points): thin it to what the cap leaves, or to half when the
+            // other buffer alone exceeds the cap (that one is thinned next).
+            let removed = if from_labelled {
+                self.labelled.front_mut().map_or(0, |c| thin(c, excess))
+            } else {
+                self.unlabelled.front_mut().map_or(0, |c| thin(c, excess))
+            };
+            if removed == 0 {
+                break;
+            }
+            self.stats.thinned_points += removed as u64;
         }
     }
 
@@ -558,16 +668,17 @@ impl Bridge {
         &mut self,
         topic: &'static str,
         msg: &PointCloud2,
+        now: Duration,
         decode: impl FnOnce(&CloudView<'_>) -> Result<T, CloudError>,
     ) -> Result<T, BridgeError> {
-        self.check_frame(topic, &msg.header)?;
+        self.check_frame(topic, &msg.header, now)?;
         if self.odom.is_none() {
             self.stats.clouds_before_odometry += 1;
             return Err(BridgeError::NoOdometry(topic));
         }
         CloudView::new(msg)
             .and_then(|view| decode(&view))
-            .map_err(|source| self.reject(BridgeError::Cloud { topic, source }))
+            .map_err(|source| self.reject(BridgeError::Cloud { topic, source }, now))
     }
 
     /// `/semantic_scan`: points with a `label` channel. Returns the number
@@ -579,11 +690,12 @@ impl Bridge {
     pub fn on_semantic_scan(
         &mut self,
         msg: &PointCloud2,
-        _now: Duration,
+        now: Duration,
     ) -> Result<usize, BridgeError> {
         let field = self.config.inputs.label_field.clone();
-        let decoded =
-            self.decode_cloud("semantic_scan", msg, |view| view.labelled_points(&field))?;
+        let decoded = self.decode_cloud("semantic_scan", msg, now, |view| {
+            view.labelled_points(&field)
+        })?;
         self.stats.semantic_clouds += 1;
         self.stats.skipped_points += (decoded.non_finite + decoded.bad_label) as u64;
         let n = decoded.points.len();
@@ -601,12 +713,13 @@ impl Bridge {
     pub fn on_registered_scan(
         &mut self,
         msg: &PointCloud2,
-        _now: Duration,
+        now: Duration,
     ) -> Result<usize, BridgeError> {
         if !self.config.inputs.use_registered_scan {
             return Ok(0);
         }
-        let (points, skipped) = self.decode_cloud("registered_scan", msg, |view| view.xyz())?;
+        let (points, skipped) =
+            self.decode_cloud("registered_scan", msg, now, |view| view.xyz())?;
         self.stats.registered_scans += 1;
         self.stats.skipped_points += skipped as u64;
         let n = points.len();
@@ -626,13 +739,14 @@ impl Bridge {
     pub fn on_terrain_map(
         &mut self,
         msg: &PointCloud2,
-        _now: Duration,
+        now: Duration,
     ) -> Result<usize, BridgeError> {
         if !self.config.inputs.use_terrain_map {
             return Ok(0);
         }
         let field = self.config.inputs.terrain_height_field.clone();
-        let decoded = self.decode_cloud("terrain_map", msg, |view| view.points_with(&field))?;
+        let decoded =
+            self.decode_cloud("terrain_map", msg, now, |view| view.points_with(&field))?;
         let floor = self
             .agent
             .as_ref()
@@ -667,7 +781,7 @@ impl Bridge {
     ) -> Result<Vec<Outgoing>, BridgeError> {
         let request = msg.data.trim().to_owned();
         if request.is_empty() {
-            return Err(self.reject(BridgeError::BlankTarget));
+            return Err(self.reject(BridgeError::BlankTarget, now));
         }
         if self.agent.is_none() {
             self.pending_target = Some(request);
@@ -723,7 +837,7 @@ impl Bridge {
                 self.last_step = None;
                 Ok(())
             }
-            Err(e) => Err(self.reject(e.into())),
+            Err(e) => Err(self.reject(e.into(), now)),
         }
     }
 
@@ -1027,6 +1141,11 @@ impl Bridge {
             agent: agent.map(Agent::stats),
             bridge: self.stats,
             last_error: self.last_error.clone(),
+            rejections: self
+                .rejections
+                .iter()
+                .map(|(k, r)| (k.clone(), r.count))
+                .collect(),
             stairs: self.stairs.clone(),
             note: self.note.clone(),
         }
@@ -1037,6 +1156,27 @@ impl Bridge {
             data: serde_json::to_string(&self.status(now)).unwrap_or_default(),
         })
     }
+}
+
+/// Removes `excess` points of `cloud` (at most half of them per call, at
+/// least one), keeping the rest evenly spread over the cloud's order (a
+/// fractional stride); returns how many were removed.
+fn thin<T>(cloud: &mut Vec<T>, excess: usize) -> usize {
+    let n = cloud.len();
+    if n < 2 || excess == 0 {
+        return 0;
+    }
+    let keep = n.saturating_sub(excess).max(n / 2).max(1);
+    // Point i is kept when floor((i + 1) keep / n) steps past floor(i keep / n):
+    // exactly `keep` points, one per stride of n / keep.
+    let step = |i: usize| (i as u128 * keep as u128) / n as u128;
+    let mut i = 0;
+    cloud.retain(|_| {
+        let kept = step(i + 1) > step(i);
+        i += 1;
+        kept
+    });
+    n - cloud.len()
 }
 
 /// Clamps a twist to a ground robot's limits: planar linear velocity to

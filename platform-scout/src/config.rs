@@ -410,6 +410,9 @@ impl Default for InputsConfig {
     }
 }
 
+/// Largest ROS 2 domain id (RTPS port arithmetic on the default ports).
+pub const MAX_DOMAIN_ID: u16 = 232;
+
 /// ROS 2 participant settings.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -499,6 +502,29 @@ impl ScoutConfig {
         Ok(config)
     }
 
+    /// Applies the `ROS_DOMAIN_ID` environment variable, given as `value`
+    /// (`std::env::var("ROS_DOMAIN_ID").ok()`): when set and not blank it
+    /// replaces `ros.domain_id`, as in ROS 2.
+    ///
+    /// # Errors
+    /// [`ConfigError::Invalid`] naming `ROS_DOMAIN_ID` when the value is
+    /// not an integer in `0..=232`.
+    pub fn apply_ros_domain_id_env(&mut self, value: Option<&str>) -> Result<(), ConfigError> {
+        let Some(v) = value.map(str::trim).filter(|v| !v.is_empty()) else {
+            return Ok(());
+        };
+        match v.parse::<u16>() {
+            Ok(d) if d <= MAX_DOMAIN_ID => {
+                self.ros.domain_id = d;
+                Ok(())
+            }
+            _ => Err(invalid(
+                "ROS_DOMAIN_ID",
+                format!("`{v}` is not a domain id in 0..={MAX_DOMAIN_ID}"),
+            )),
+        }
+    }
+
     /// Reads, parses and validates a TOML file.
     ///
     /// # Errors
@@ -565,7 +591,7 @@ impl ScoutConfig {
         if i.floor_z.is_some_and(|z| !z.is_finite()) {
             return Err(invalid("inputs.floor_z", "must be finite"));
         }
-        if self.ros.domain_id > 232 {
+        if self.ros.domain_id > MAX_DOMAIN_ID {
             return Err(invalid("ros.domain_id", "must be in 0..=232"));
         }
         if self.ros.node_name.is_empty()

@@ -168,6 +168,75 @@ fn bad_inputs_are_rejected_and_counted() {
     assert!(b.on_terrain_map(&xyzi(&pts, "/map"), ms(0)).is_ok());
 }
 
+/// Issue 21: rejections were logged only at debug level and only the
+/// latest showed (`last_error`), and undecodable samples were never
+/// reported. Each is now counted by cause in the status and logged at warn,
+/// at most once per cause and `REJECTION_WARN_INTERVAL`.
+#[test]
+fn rejections_are_counted_by_cause_and_logged_at_a_limited_rate() {
+    use std::sync::{Arc, Mutex};
+    use tracing_subscriber::Layer as _;
+    use tracing_subscriber::layer::SubscriberExt;
+
+    #[derive(Clone, Default)]
+    struct Sink(Arc<Mutex<Vec<u8>>>);
+    impl std::io::Write for Sink {
+        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
+            self.0.lock().unwrap().extend_from_slice(b);
+            Ok(b.len())
+        }
+        fn flush(&mut self) -> std::io::Result<()> {
+            Ok(())
+        }
+    }
+    let sink = Sink::default();
+    let writer = sink.clone();
+    let subscriber = tracing_subscriber::registry().with(
+        tracing_subscriber::fmt::layer()
+            .with_ansi(false)
+            .with_writer(move || writer.clone())
+            .with_filter(tracing_subscriber::filter::LevelFilter::WARN),
+    );
+    let mut b = Bridge::new(config()).unwrap();
+    tracing::subscriber::with_default(subscriber, || {
+        b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+        let mut wrong = odom(0.0, 0.0, 0.0);
+        wrong.header.frame_id = "base_link".into();
+        // a burst of 50 in 4.9 s, then one after the interval
+        for t in 0..50 {
+            assert!(b.on_odometry(&wrong, ms(t * 100)).is_err());
+        }
+        assert!(b.on_odometry(&wrong, ms(5_000)).is_err());
+        b.on_undecodable("odometry", "buffer too short", ms(100));
+        b.on_undecodable("odometry", "buffer too short", ms(200));
+        assert!(
+            b.on_target(&RosString { data: " ".into() }, ms(300))
+                .is_err()
+        );
+    });
+    let s = b.status(ms(5_000));
+    let expect: std::collections::BTreeMap<String, u64> = [
+        ("frame:odometry", 51),
+        ("undecodable:odometry", 2),
+        ("blank_target", 1),
+    ]
+    .into_iter()
+    .map(|(k, v)| (k.to_owned(), v))
+    .collect();
+    assert_eq!(s.rejections, expect);
+    assert_eq!(s.bridge.rejected_messages, 52);
+    assert_eq!(s.bridge.undecodable_samples, 2);
+    let log = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+    let lines = |needle: &str| log.lines().filter(|l| l.contains(needle)).count();
+    // one warning at the burst's start, one after the interval (saying how
+    // many were not logged), one per other cause
+    assert_eq!(lines("odometry is in frame `base_link`"), 2, "{log}");
+    assert!(log.contains("not_logged=49"), "{log}");
+    assert_eq!(lines("failed to decode"), 1, "{log}");
+    assert_eq!(lines("blank target"), 1, "{log}");
+    assert!(log.lines().all(|l| l.contains("WARN")), "{log}");
+}
+
 #[test]
 fn unlabelled_returns_feed_occupancy_only() {
     let mut b = Bridge::new(config()).unwrap();
@@ -253,6 +322,44 @@ fn point_cap_drops_the_oldest_clouds() {
     b.tick(ms(0));
     assert_eq!(b.agent().unwrap().semantic_map().integrations(), 1);
     assert_eq!(b.agent().unwrap().stats().observations, 1);
+}
+
+/// Issue 21: one cloud above `max_points_per_observation` was dropped
+/// whole; it is now thinned to the cap, its kept points spread over the
+/// whole cloud.
+#[test]
+fn one_cloud_above_the_cap_is_thinned_not_dropped() {
+    let mut c = config();
+    c.inputs.max_points_per_observation = 100;
+    let mut b = Bridge::new(c.clone()).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    // 1000 points 1 cm apart along 10 m (200 voxels of 5 cm)
+    let line: Vec<[f64; 4]> = (0..1000)
+        .map(|i| [1.0 + f64::from(i) * 0.01, 0.0, 0.3, 1.0])
+        .collect();
+    b.on_semantic_scan(&semantic(&line), ms(0)).unwrap();
+    assert_eq!(
+        (b.stats().dropped_points, b.stats().thinned_points),
+        (0, 900)
+    );
+    b.tick(ms(0));
+    let a = b.agent().unwrap();
+    assert_eq!(a.stats().observations, 1);
+    // the 100 kept points lie 10 cm apart over the whole line: 100 voxels
+    // (the first 100 points would fill 20)
+    assert_eq!(a.semantic_map().voxel_count(), 100);
+
+    // both buffers with one cloud each, above the cap together: both
+    // thinned, to exactly the cap
+    let mut b = Bridge::new(c).unwrap();
+    b.on_odometry(&odom(0.0, 0.0, 0.0), ms(0)).unwrap();
+    b.on_semantic_scan(&semantic(&line[..80]), ms(0)).unwrap();
+    b.on_registered_scan(&xyzi(&line[..80], "map"), ms(0))
+        .unwrap();
+    assert_eq!(
+        (b.stats().dropped_points, b.stats().thinned_points),
+        (0, 60)
+    );
 }
 
 /// Drives the bridge in the room: returns the outputs of every tick.

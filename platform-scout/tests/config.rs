@@ -212,3 +212,24 @@ fn ros_names() {
         assert!(!is_ros_name(bad), "{bad}");
     }
 }
+
+/// Issue 21: `ROS_DOMAIN_ID` was ignored although docs/ROBOT.md says it is
+/// used. Set and not blank, it replaces `ros.domain_id`; a bad value names
+/// the variable.
+#[test]
+fn ros_domain_id_from_the_environment() {
+    let mut config = ScoutConfig::from_toml("[ros]\ndomain_id = 7\n").unwrap();
+    config.apply_ros_domain_id_env(None).unwrap();
+    assert_eq!(config.ros.domain_id, 7);
+    config.apply_ros_domain_id_env(Some("  ")).unwrap();
+    assert_eq!(config.ros.domain_id, 7);
+    config.apply_ros_domain_id_env(Some("42")).unwrap();
+    assert_eq!(config.ros.domain_id, 42);
+    for bad in ["233", "-1", "forty", "1e3"] {
+        match config.apply_ros_domain_id_env(Some(bad)) {
+            Err(ConfigError::Invalid { field, .. }) => assert_eq!(field, "ROS_DOMAIN_ID"),
+            other => panic!("{bad}: expected an invalid ROS_DOMAIN_ID, got {other:?}"),
+        }
+        assert_eq!(config.ros.domain_id, 42, "unchanged by {bad}");
+    }
+}

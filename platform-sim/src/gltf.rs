@@ -62,9 +62,12 @@ fn kind_and_category(label: &str) -> (InstanceKind, String) {
 ///
 /// # Errors
 /// [`SceneError::Io`] when the file or a buffer cannot be read,
-/// [`SceneError::Gltf`] (naming the node where relevant) for malformed files,
-/// non-triangle-list indices or non-finite positions, [`SceneError::Empty`]
-/// when no triangles are found.
+/// [`SceneError::Gltf`] (naming the node where relevant) for malformed files
+/// (references out of range, accessors of the wrong type or outside their
+/// buffers, sparse accessors, a node hierarchy that is not a set of strict
+/// trees), non-triangle-list indices, non-finite positions or more than
+/// [`MAX_GLTF_TRIANGLES`] triangles, [`SceneError::Empty`] when no triangles
+/// are found.
 ///
 /// # Complexity
 /// O(V + T) in the vertices and triangles of all mesh instances.
@@ -87,7 +90,7 @@ pub fn load_gltf(path: &Path) -> Result<Scene, SceneError> {
 /// # Errors
 /// As [`load_gltf`].
 pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<Scene, SceneError> {
-    let g = gltf::Gltf::from_slice(bytes).map_err(|e| err(None, e.to_string()))?;
+    let g = parse_and_validate(bytes)?;
     let mut buffers: Vec<Vec<u8>> = Vec::new();
     for b in g.buffers() {
         let data = match b.source() {
@@ -134,11 +137,19 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
     let to_z_up = Matrix4::new(
         1.0, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 1.0,
     );
-    let mut visited = 0usize;
+    // glTF requires the node hierarchy to be disjoint strict trees: a node
+    // reached twice (a cycle, a shared child, a root that is also a child)
+    // would append its meshes again on every visit.
+    let mut seen = vec![false; g.nodes().len()];
     while let Some((node, parent, inherited)) = stack.pop() {
-        visited += 1;
-        if visited > 1_000_000 {
-            return Err(err(None, "node hierarchy too deep or cyclic"));
+        if std::mem::replace(&mut seen[node.index()], true) {
+            return Err(err(
+                node.name(),
+                format!(
+                    "node {} is reached twice (a cycle or a shared child): glTF node hierarchies must be strict trees",
+                    node.index()
+                ),
+            ));
         }
         let m = node.transform().matrix();
         let local = Matrix4::from_fn(|r, c| f64::from(m[c][r]));
@@ -160,6 +171,13 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
             for prim in mesh.primitives() {
                 if prim.mode() != gltf::mesh::Mode::Triangles {
                     continue;
+                }
+                let positions = prim
+                    .get(&gltf::Semantic::Positions)
+                    .ok_or_else(|| err(node_name, "primitive without positions"))?;
+                check_accessor(&positions, "POSITION", &buffers, node_name)?;
+                if let Some(indices) = prim.indices() {
+                    check_accessor(&indices, "indices", &buffers, node_name)?;
                 }
                 let reader = prim.reader(|b| buffers.get(b.index()).map(Vec::as_slice));
                 let pos: Vec<Point3<f64>> = reader
@@ -191,6 +209,12 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
                 };
                 if !idx.len().is_multiple_of(3) {
                     return Err(err(node_name, "index count is not a multiple of 3"));
+                }
+                if builder.triangle_count() + idx.len() / 3 > MAX_GLTF_TRIANGLES {
+                    return Err(err(
+                        node_name,
+                        format!("more than {MAX_GLTF_TRIANGLES} triangles (MAX_GLTF_TRIANGLES)"),
+                    ));
                 }
                 for t in idx.chunks_exact(3) {
                     let get = |i: u32| {
@@ -234,6 +258,109 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
     };
     Scene::from_description(builder.finish(name, vec![level], Vec::new()))
 }
+
+/// Parses glTF JSON or GLB bytes and runs the `gltf` crate's validation,
+/// after checking the references that validation itself reads unchecked
+/// (a primitive's `POSITION` accessor: an index out of range panicked).
+fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    let g =
+        gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| err(None, e.to_string()))?;
+    let json = g.document.as_json();
+    for (m, mesh) in json.meshes.iter().enumerate() {
+        for (p, prim) in mesh.primitives.iter().enumerate() {
+            let out_of_range = prim
+                .attributes
+                .values()
+                .chain(prim.indices.iter())
+                .find(|a| a.value() >= json.accessors.len());
+            if let Some(a) = out_of_range {
+                return Err(err(
+                    None,
+                    format!(
+                        "mesh {m} primitive {p} refers to accessor {} of {}",
+                        a.value(),
+                        json.accessors.len()
+                    ),
+                ));
+            }
+        }
+    }
+    let blob = g.blob;
+    let document =
+        gltf::Document::from_json(g.document.into_json()).map_err(|e| err(None, e.to_string()))?;
+    Ok(gltf::Gltf { document, blob })
+}
+
+/// Checks what the `gltf` crate's readers assume but never check (they
+/// panic or hit `unreachable!` otherwise): the component type and
+/// dimensions of a `POSITION` (`f32` VEC3) or `indices` (unsigned SCALAR)
+/// accessor, no sparse storage, at least one element, and the accessor's
+/// bytes inside its buffer view and the view inside its buffer (computed
+/// without overflow).
+fn check_accessor(
+    a: &gltf::Accessor<'_>,
+    what: &str,
+    buffers: &[Vec<u8>],
+    node: Option<&str>,
+) -> Result<(), SceneError> {
+    use gltf::accessor::{DataType, Dimensions};
+    let fail = |message: String| err(node, format!("{what} accessor {}: {message}", a.index()));
+    let (ty, dims) = (a.data_type(), a.dimensions());
+    let ok_type = if what == "POSITION" {
+        ty == DataType::F32 && dims == Dimensions::Vec3
+    } else {
+        matches!(ty, DataType::U8 | DataType::U16 | DataType::U32) && dims == Dimensions::Scalar
+    };
+    if !ok_type {
+        let want = if what == "POSITION" {
+            "FLOAT VEC3"
+        } else {
+            "an unsigned integer SCALAR"
+        };
+        return Err(fail(format!("is {ty:?} {dims:?}, must be {want}")));
+    }
+    if a.sparse().is_some() {
+        return Err(fail("sparse accessors are not supported".into()));
+    }
+    let view = a.view().ok_or_else(|| fail("has no buffer view".into()))?;
+    if a.count() == 0 {
+        return Err(fail("has no elements (count 0)".into()));
+    }
+    let size = a.size();
+    let stride = view.stride().unwrap_or(size);
+    if stride < size {
+        return Err(fail(format!(
+            "byte stride {stride} below the element size {size}"
+        )));
+    }
+    let buffer_len = buffers.get(view.buffer().index()).map_or(0, Vec::len);
+    let view_end = view.offset().checked_add(view.length());
+    if view_end.is_none_or(|e| e > buffer_len) {
+        return Err(fail(format!(
+            "buffer view {} lies outside its buffer of {buffer_len} bytes",
+            view.index()
+        )));
+    }
+    let end = (a.count() - 1)
+        .checked_mul(stride)
+        .and_then(|x| x.checked_add(size))
+        .and_then(|x| x.checked_add(a.offset()));
+    if end.is_none_or(|e| e > view.length()) {
+        return Err(fail(format!(
+            "{} elements from byte {} overrun buffer view {} ({} bytes)",
+            a.count(),
+            a.offset(),
+            view.index(),
+            view.length()
+        )));
+    }
+    Ok(())
+}
+
+/// Most triangles a glTF scene may expand to (after node instancing): a
+/// small file whose nodes reuse a large mesh would otherwise allocate
+/// without bound.
+pub const MAX_GLTF_TRIANGLES: usize = 10_000_000;
 
 impl Scene {
     /// Loads a glTF/GLB scene with labelled nodes (see [`crate::gltf`]).

@@ -83,6 +83,27 @@ impl Default for RunConfig {
     }
 }
 
+impl RunConfig {
+    /// Checks that an episode can run under these rules.
+    ///
+    /// # Errors
+    /// [`SimError::Config`] naming the field: `max_actions` must be at least
+    /// 1, `wall_clock_s` positive (not NaN; infinite means no limit),
+    /// `success_distance` at least 0.
+    pub fn validate(&self) -> Result<(), SimError> {
+        if self.max_actions == 0 {
+            return Err(SimError::Config("max_actions must be at least 1"));
+        }
+        if self.wall_clock_s.is_nan() || self.wall_clock_s <= 0.0 {
+            return Err(SimError::Config("wall_clock_s must be positive (not NaN)"));
+        }
+        if !(0.0..).contains(&self.success_distance) {
+            return Err(SimError::Config("success_distance must be at least 0"));
+        }
+        Ok(())
+    }
+}
+
 /// Errors of simulator construction and episode runs.
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
@@ -289,15 +310,7 @@ pub fn run_episode(
     policy: &mut dyn Policy,
     config: &RunConfig,
 ) -> Result<EpisodeResult, SimError> {
-    if config.max_actions == 0
-        || config.wall_clock_s.is_nan()
-        || config.wall_clock_s <= 0.0
-        || !(0.0..).contains(&config.success_distance)
-    {
-        return Err(SimError::Config(
-            "max_actions, wall_clock_s must be positive and success_distance >= 0",
-        ));
-    }
+    config.validate()?;
     let t0 = Instant::now();
     let mut agent = sim.spawn(episode)?;
     let field = sim.goal_field(episode)?;

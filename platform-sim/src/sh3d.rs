@@ -200,6 +200,26 @@ impl Attrs<'_> {
     }
 }
 
+/// Largest accepted `|arcExtent|` of a wall: an arc between two distinct
+/// points sweeps less than a full turn. (Unbounded, `1e5` took 108 s and
+/// 4 GB and `1e12` aborted allocating 91 TB of arc points.)
+pub const MAX_ARC_EXTENT: f64 = std::f64::consts::TAU;
+
+/// A wall's `arcExtent` (radians), checked against [`MAX_ARC_EXTENT`].
+fn arc_extent(a: &Attrs<'_>) -> Result<Option<f64>, SceneError> {
+    let extent = a.opt_f("arcExtent")?;
+    if let Some(x) = extent
+        && x.abs() >= MAX_ARC_EXTENT
+    {
+        return Err(SceneError::Attribute {
+            element: a.label.clone(),
+            attribute: "arcExtent".into(),
+            message: format!("{x} radians: |arcExtent| must be below 2 pi (MAX_ARC_EXTENT)"),
+        });
+    }
+    Ok(extent)
+}
+
 fn parse_xml(xml: &str) -> Result<XmlHome, SceneError> {
     let mut reader = quick_xml::Reader::from_str(xml);
     let mut home = XmlHome {
@@ -264,7 +284,7 @@ fn parse_xml(xml: &str) -> Result<XmlHome, SceneError> {
                 thickness: a.f("thickness")?,
                 height: a.opt_f("height")?,
                 height_at_end: a.opt_f("heightAtEnd")?,
-                arc_extent: a.opt_f("arcExtent")?,
+                arc_extent: arc_extent(&a)?,
                 joined_start: m.contains_key("wallAtStart"),
                 joined_end: m.contains_key("wallAtEnd"),
             }),

@@ -204,3 +204,47 @@ fn malformed_files_are_typed_errors() {
     ));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Issue 21: a small `.json.gz` decompressed without bound (a 1.5 MB file
+/// took 1.65 GB). A file inflating to one byte more than the limit is
+/// refused, naming the limit, after reading at most that many bytes; one at
+/// the limit is read.
+#[test]
+fn decompression_is_bounded() {
+    use sornav_platform_sim::episodes::{EpisodeError, MAX_EPISODE_FILE_BYTES};
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("sornav-gz-bomb-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let gz = |name: &str, text_len: usize| {
+        let path = dir.join(name);
+        let mut enc = flate2::write::GzEncoder::new(
+            std::fs::File::create(&path).unwrap(),
+            flate2::Compression::fast(),
+        );
+        let head = br#"{"episodes":[]}"#;
+        enc.write_all(head).unwrap();
+        let spaces = vec![b' '; 1 << 20];
+        let mut left = text_len - head.len();
+        while left > 0 {
+            let n = left.min(spaces.len());
+            enc.write_all(&spaces[..n]).unwrap();
+            left -= n;
+        }
+        enc.finish().unwrap();
+        path
+    };
+    let bomb = gz("bomb.json.gz", MAX_EPISODE_FILE_BYTES + 1);
+    assert!(std::fs::metadata(&bomb).unwrap().len() < 2 << 20);
+    let began = std::time::Instant::now();
+    match HabitatDataset::read(&bomb) {
+        Err(e @ EpisodeError::TooLarge { limit, .. }) => {
+            assert_eq!(limit, MAX_EPISODE_FILE_BYTES);
+            assert!(e.to_string().contains("MAX_EPISODE_FILE_BYTES"), "{e}");
+        }
+        other => panic!("expected TooLarge, got {other:?}"),
+    }
+    assert!(began.elapsed() < std::time::Duration::from_secs(10));
+    let at_limit = gz("at_limit.json.gz", MAX_EPISODE_FILE_BYTES);
+    assert!(HabitatDataset::read(&at_limit).unwrap().episodes.is_empty());
+    let _ = std::fs::remove_dir_all(&dir);
+}

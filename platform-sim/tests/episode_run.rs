@@ -447,3 +447,53 @@ fn procedural_cross_floor_oracle_many_houses() {
     );
     assert!(sr >= 0.95, "cross-floor oracle SR {sr:.3}: {failures:#?}");
 }
+
+/// Issue 21: rules under which no episode can run are refused up front by
+/// `RunConfig::validate` (the harness checks them before any episode),
+/// naming the field.
+#[test]
+fn run_rules_that_cannot_run_are_refused() {
+    assert!(RunConfig::default().validate().is_ok());
+    let infinite = RunConfig {
+        wall_clock_s: f64::INFINITY,
+        ..RunConfig::default()
+    };
+    assert!(infinite.validate().is_ok(), "infinite means no limit");
+    for (config, field) in [
+        (
+            RunConfig {
+                max_actions: 0,
+                ..RunConfig::default()
+            },
+            "max_actions",
+        ),
+        (
+            RunConfig {
+                wall_clock_s: 0.0,
+                ..RunConfig::default()
+            },
+            "wall_clock_s",
+        ),
+        (
+            RunConfig {
+                wall_clock_s: f64::NAN,
+                ..RunConfig::default()
+            },
+            "wall_clock_s",
+        ),
+        (
+            RunConfig {
+                success_distance: -1.0,
+                ..RunConfig::default()
+            },
+            "success_distance",
+        ),
+    ] {
+        match config.validate() {
+            Err(e @ sornav_platform_sim::SimError::Config(_)) => {
+                assert!(e.to_string().contains(field), "{e}");
+            }
+            other => panic!("{field}: expected a configuration error, got {other:?}"),
+        }
+    }
+}

@@ -326,3 +326,42 @@ fn huge_scenes_are_rejected_not_allocated() {
         Err(SceneError::Invalid(_))
     ));
 }
+
+/// Issue 21: a wall's `arcExtent` was never bounded: `1e12` aborted
+/// allocating 91 TB of arc points, `1e300` panicked ("capacity overflow"),
+/// `1e5` took 108 s and 4 GB (tests/data/sh3d_wall_arc_extent.xml).
+#[test]
+fn unbounded_wall_arc_extent_is_an_attribute_error() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/sh3d_wall_arc_extent.xml");
+    let xml = std::fs::read_to_string(path).unwrap();
+    assert!(xml.contains("arcExtent='1e12'"));
+    let began = std::time::Instant::now();
+    for extent in ["1e12", "1e300", "1e5", "-7", "6.2832"] {
+        let doc = xml.replace("'1e12'", &format!("'{extent}'"));
+        match load(&doc) {
+            Err(SceneError::Attribute {
+                element,
+                attribute,
+                message,
+            }) => {
+                assert_eq!(
+                    (element.as_str(), attribute.as_str()),
+                    ("wall 'wall0'", "arcExtent")
+                );
+                assert!(message.contains("2 pi"), "{message}");
+            }
+            Err(other) => panic!("{extent}: expected an attribute error, got {other}"),
+            Ok(_) => panic!("{extent}: expected an attribute error, got a scene"),
+        }
+    }
+    // just under a full turn still builds (36 pieces at most)
+    let nearly_full = load(&xml.replace("'1e12'", "'6.28'")).unwrap();
+    assert!(
+        nearly_full
+            .instances()
+            .iter()
+            .any(|i| i.name == "wall wall0")
+    );
+    assert!(began.elapsed() < std::time::Duration::from_secs(10));
+}

@@ -470,3 +470,144 @@ fn broken_files_give_typed_errors() {
         Err(SceneError::Empty(_))
     ));
 }
+
+// ---------------------------------------------------------------------------
+// Issue 21: minimal reproducers (tests/data) that panicked, hit
+// `unreachable!` or aborted; each is now a typed error naming the problem.
+
+fn data(file: &str) -> std::path::PathBuf {
+    std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(file)
+}
+
+fn load_error(result: Result<Scene, SceneError>) -> String {
+    match result {
+        Err(e @ SceneError::Gltf { .. }) => e.to_string(),
+        Err(other) => panic!("expected a glTF error, got {other}"),
+        Ok(_) => panic!("expected a glTF error, got a scene"),
+    }
+}
+
+#[test]
+fn reproducer_control_loads() {
+    let s = Scene::from_gltf(&data("gltf_triangle.gltf")).unwrap();
+    assert_eq!(s.triangles().len(), 1);
+}
+
+#[test]
+fn position_attribute_to_a_missing_accessor_is_an_error() {
+    // panicked (index out of bounds) inside the gltf crate's validation
+    let msg = load_error(Scene::from_gltf(&data(
+        "gltf_missing_position_accessor.gltf",
+    )));
+    assert!(msg.contains("accessor 5 of 1"), "{msg}");
+}
+
+#[test]
+fn float_typed_indices_are_an_error() {
+    // hit `unreachable!()` in the gltf crate's `read_indices`
+    let msg = load_error(Scene::from_gltf(&data("gltf_float_indices.gltf")));
+    assert!(
+        msg.contains("indices accessor 1") && msg.contains("unsigned"),
+        "{msg}"
+    );
+}
+
+#[test]
+fn a_node_listing_itself_as_a_child_is_an_error() {
+    // appended its mesh on every visit until 10^6 visits (4.5 GB, abort)
+    let began = std::time::Instant::now();
+    let msg = load_error(Scene::from_gltf(&data("gltf_node_cycle.gltf")));
+    assert!(
+        msg.contains("node `chair_1`") && msg.contains("strict trees"),
+        "{msg}"
+    );
+    assert!(began.elapsed() < std::time::Duration::from_secs(5));
+}
+
+#[test]
+fn shared_children_are_an_error_not_an_exponential_walk() {
+    // 40 levels of a node listing the next one twice: 2^40 visits before.
+    let mut g = Glb::default();
+    let tri = g.mesh(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]], None);
+    let nodes: Vec<String> = (0..40)
+        .map(|k| {
+            if k == 39 {
+                format!(r#"{{"name":"leaf","mesh":{tri}}}"#)
+            } else {
+                format!(r#"{{"children":[{0},{0}]}}"#, k + 1)
+            }
+        })
+        .collect();
+    let bytes = g.build(&format!("[{}]", nodes.join(",")), &[0]);
+    let msg = load_error(gltf_from_slice(&bytes, "dag", None));
+    assert!(msg.contains("reached twice"), "{msg}");
+}
+
+#[test]
+fn accessors_outside_their_views_or_of_the_wrong_type_are_errors() {
+    let text = std::fs::read_to_string(data("gltf_triangle.gltf")).unwrap();
+    let dir = data("");
+    let load = |doc: String| gltf_from_slice(doc.as_bytes(), "bad", Some(&dir));
+    for (from, to, expect) in [
+        (r#""count":3"#, r#""count":4"#, "overrun buffer view"),
+        (
+            r#""count":3"#,
+            r#""count":18446744073709551615"#,
+            "overrun buffer view",
+        ),
+        (r#""count":3"#, r#""count":0"#, "count 0"),
+        (
+            r#""componentType":5126"#,
+            r#""componentType":5121"#,
+            "FLOAT VEC3",
+        ),
+        (r#""type":"VEC3""#, r#""type":"VEC2""#, "FLOAT VEC3"),
+        (
+            r#""byteOffset":0,"byteLength":36"#,
+            r#""byteOffset":40,"byteLength":36"#,
+            "outside its buffer",
+        ),
+        (
+            r#""byteOffset":0,"byteLength":36"#,
+            r#""byteOffset":18446744073709551615,"byteLength":36"#,
+            "outside its buffer",
+        ),
+    ] {
+        assert!(text.contains(from));
+        let msg = load_error(load(text.replacen(from, to, 1)));
+        assert!(msg.contains(expect), "{to}: {msg}");
+    }
+}
+
+mod fuzz {
+    use proptest::prelude::*;
+    use sornav_platform_sim::gltf::gltf_from_slice;
+
+    use super::{Glb, data};
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 300, ..ProptestConfig::default() })]
+
+        /// Corrupting or truncating a glTF document (JSON with an external
+        /// buffer) or a GLB anywhere gives a scene or a typed error, never
+        /// a panic (issue 21: missing accessors, float indices and node
+        /// cycles panicked or aborted).
+        #[test]
+        fn gltf_loader_never_panics(cut in 1usize..2000, pos in 0usize..2000, byte in any::<u8>(), glb: bool) {
+            let mut bytes = if glb {
+                let mut g = Glb::default();
+                let m = g.mesh(&[[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, -1.0]], Some(&[0, 1, 2]));
+                g.build(&format!(r#"[{{"name":"chair_1","mesh":{m},"children":[1]}},{{"name":"wall","mesh":{m}}}]"#), &[0])
+            } else {
+                std::fs::read(data("gltf_triangle.gltf")).unwrap()
+            };
+            bytes.truncate(cut.max(1));
+            let at = pos % bytes.len();
+            bytes[at] = byte;
+            let dir = data("");
+            let _ = gltf_from_slice(&bytes, "fuzz", Some(&dir));
+        }
+    }
+}

@@ -110,6 +110,13 @@ fn unknown_fields_and_bad_values_are_errors() {
         ("supervisor", "[supervisor]\ninterval_s = -0.5\n"),
         ("depth", "[depth]\nstride = 0\n"),
         ("depth", "[depth]\nmin_depth = 3.0\nmax_depth = 2.0\n"),
+        // Issue 21: these validated, then panicked ("overflow when adding
+        // duration to instant") or never returned.
+        (
+            "horizon",
+            "[horizon.solver.time_budget]\nsecs = 9223372036854775807\nnanos = 0\n",
+        ),
+        ("horizon", "[horizon.solver]\nkicks_per_pair = 1e300\n"),
     ] {
         match AgentConfig::from_toml(doc) {
             Err(ConfigError::Component { component: c, .. }) => assert_eq!(c, component, "{doc}"),

@@ -72,4 +72,7 @@ pub use error::TspError;
 pub use held_karp::HELD_KARP_MAX_NODES;
 pub use horizon::{HorizonFrontier, HorizonPlan, HorizonProblem, RecedingHorizon, ReplacementRule};
 pub use matrix::{CostMatrix, MAX_ABS_COST};
-pub use solver::{Method, Solver, SolverConfig, Tour, held_karp, nearest_neighbour_route};
+pub use solver::{
+    MAX_KICKS_PER_NODE, MAX_KICKS_PER_PAIR, MAX_TIME_BUDGET, Method, Solver, SolverConfig, Tour,
+    held_karp, nearest_neighbour_route,
+};

@@ -124,6 +124,10 @@ struct State<'a> {
     queued: Vec<bool>,
     scratch: Vec<u32>,
     eps: f64,
+    /// Largest `|c(i, j)|` off the diagonal (at least 1): the scale of the
+    /// rounding in tracked costs (each move's delta is a sum of arc costs,
+    /// so a delta near a large arc's magnitude loses the small arcs' digits).
+    max_abs: f64,
 }
 
 impl<'a> State<'a> {
@@ -196,6 +200,7 @@ impl<'a> State<'a> {
             queued: vec![false; m],
             scratch: Vec::with_capacity(m),
             eps: 1e-9 * cost_scale.map_or(max_abs, |s| s.max(1.0)),
+            max_abs,
         };
         for (p, &v) in st.tour.iter().enumerate() {
             st.pos[v as usize] = p as u32;
@@ -209,9 +214,7 @@ impl<'a> State<'a> {
 
     /// Tour cost summed from scratch.
     fn recomputed_cost(&self) -> f64 {
-        (0..self.m)
-            .map(|t| self.cost(self.tour[t], self.tour[(t + 1) % self.m]))
-            .sum()
+        tour_cost(self.c, self.m, &self.tour)
     }
 
     #[inline]
@@ -360,8 +363,13 @@ impl<'a> State<'a> {
     fn finish_move(&mut self, delta: f64, touched: &[u32]) {
         self.cost += delta;
         self.rebuild_prefix();
+        // The tracked cost carries the rounding of every applied delta, of
+        // the order of an ulp of the largest arc per move (costs above ~1e16
+        // next to small ones lose the small ones' digits): the tolerance is
+        // relative to the tour cost and to the matrix's scale.
         debug_assert!(
-            (self.cost - self.recomputed_cost()).abs() <= 1e-6 * self.cost.abs().max(1.0),
+            (self.cost - self.recomputed_cost()).abs()
+                <= 1e-6 * self.cost.abs().max(1.0) + 1e-9 * self.max_abs,
             "tracked {} vs actual {} {:?}",
             self.cost,
             self.recomputed_cost(),
@@ -790,6 +798,13 @@ fn asymmetry_cover(c: &[f64], m: usize) -> (Asymmetry, Vec<bool>) {
     }
 }
 
+/// Cost of the closed tour `tour` on the `m x m` row-major matrix `c`.
+fn tour_cost(c: &[f64], m: usize, tour: &[u32]) -> f64 {
+    (0..m)
+        .map(|t| c[tour[t] as usize * m + tour[(t + 1) % m] as usize])
+        .sum()
+}
+
 /// Improves `initial` (a permutation of `0..m`, `m >= 4`) by iterated local
 /// search and returns the best tour found.
 ///
@@ -847,7 +862,13 @@ pub(crate) fn iterated_local_search(
             best_tour.copy_from_slice(&st.tour);
         }
     }
-    if best_cost < current - st.eps {
+    // The final choice prices both tours from scratch: tracked costs drift by
+    // the rounding of every delta, and on matrices mixing costs above ~1e16
+    // with small ones that drift (and `eps`, relative to the largest cost)
+    // hides differences of the small costs, so the walk's `current` may be
+    // worse than the best tour seen.
+    let best_exact = tour_cost(c, m, &best_tour);
+    if best_exact < st.recomputed_cost() {
         st.tour.copy_from_slice(&best_tour);
     }
     st.tour.into_iter().map(|v| v as usize).collect()

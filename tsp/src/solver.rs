@@ -24,20 +24,34 @@ pub struct SolverConfig {
     pub candidates: usize,
     /// Kicks of the iterated local search per node, at least: on `r` nodes
     /// the search makes `max(kicks_per_node * r, ceil(kicks_per_pair * r^2))`
-    /// kicks. Default 6.
+    /// kicks. At most [`MAX_KICKS_PER_NODE`] unless `time_budget` is set.
+    /// Default 6.
     pub kicks_per_node: usize,
     /// Kicks per pair of nodes (see `kicks_per_node`): larger instances get
     /// more kicks per node, as they need them to reach the same quality.
-    /// Finite and at least 0. Default 0.05 (from `r = 120` on, the budget is
+    /// Finite and at least 0, and at most [`MAX_KICKS_PER_PAIR`] unless
+    /// `time_budget` is set. Default 0.05 (from `r = 120` on, the budget is
     /// quadratic: 2000 kicks at `r = 200`).
     pub kicks_per_pair: f64,
     /// Optional wall-time budget of the iterated local search (the initial
     /// descent always completes). When it binds, results depend on the
-    /// machine's speed. Default `None`.
+    /// machine's speed. At most [`MAX_TIME_BUDGET`]. Default `None`.
     pub time_budget: Option<Duration>,
     /// Seed of the kicks: equal inputs and seeds give equal tours. Default 0.
     pub seed: u64,
 }
+
+/// Largest [`SolverConfig::kicks_per_node`] accepted without a time budget
+/// (a kick costs 5-8 microseconds: 1000 kicks per node on 300 nodes take
+/// about 2 s).
+pub const MAX_KICKS_PER_NODE: usize = 1000;
+
+/// Largest [`SolverConfig::kicks_per_pair`] accepted without a time budget
+/// (20 times the default: 90,000 kicks, under 1 s, on 300 nodes).
+pub const MAX_KICKS_PER_PAIR: f64 = 1.0;
+
+/// Largest accepted [`SolverConfig::time_budget`]: one hour.
+pub const MAX_TIME_BUDGET: Duration = Duration::from_secs(3600);
 
 impl Default for SolverConfig {
     fn default() -> Self {
@@ -56,7 +70,7 @@ impl SolverConfig {
     /// Checks the documented ranges.
     ///
     /// # Errors
-    /// [`TspError::InvalidConfig`] naming the offending field.
+    /// [`TspError::InvalidConfig`] naming the offending field and its limit.
     pub fn validate(&self) -> Result<(), TspError> {
         if self.exact_max_nodes > HELD_KARP_MAX_NODES {
             return Err(TspError::InvalidConfig(format!(
@@ -74,6 +88,31 @@ impl SolverConfig {
                 "kicks_per_pair = {} must be finite and at least 0",
                 self.kicks_per_pair
             )));
+        }
+        if let Some(b) = self.time_budget
+            && b > MAX_TIME_BUDGET
+        {
+            return Err(TspError::InvalidConfig(format!(
+                "time_budget = {} s exceeds the limit of {} s",
+                b.as_secs_f64(),
+                MAX_TIME_BUDGET.as_secs()
+            )));
+        }
+        // Without a time budget nothing but the kick count ends the search,
+        // so it must stay within what a solve can finish.
+        if self.time_budget.is_none() {
+            if self.kicks_per_node > MAX_KICKS_PER_NODE {
+                return Err(TspError::InvalidConfig(format!(
+                    "kicks_per_node = {} exceeds the limit of {MAX_KICKS_PER_NODE} (set time_budget to allow more)",
+                    self.kicks_per_node
+                )));
+            }
+            if self.kicks_per_pair > MAX_KICKS_PER_PAIR {
+                return Err(TspError::InvalidConfig(format!(
+                    "kicks_per_pair = {} exceeds the limit of {MAX_KICKS_PER_PAIR} (set time_budget to allow more)",
+                    self.kicks_per_pair
+                )));
+            }
         }
         Ok(())
     }
@@ -484,7 +523,9 @@ impl Solver {
         let params = IlsParams {
             candidates: self.config.candidates,
             kicks: self.config.kicks(r),
-            deadline: self.config.time_budget.map(|b| began + b),
+            // validated at most MAX_TIME_BUDGET; an unrepresentable instant
+            // would only mean no deadline
+            deadline: self.config.time_budget.and_then(|b| began.checked_add(b)),
             seed: self.config.seed,
             cost_scale: None,
         };

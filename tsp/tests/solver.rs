@@ -277,3 +277,113 @@ fn matrices_reject_bad_values() {
         Err(TspError::NodeOutOfRange { node: 7, .. })
     ));
 }
+
+/// Issue 21: valid matrices mixing costs above ~1e16 with small ones made
+/// the local search's tracked-cost check (debug builds) fire, since the
+/// rounding of one move's delta exceeds a tolerance relative to a small tour
+/// cost. Every solver must return a permutation priced like the matrix.
+#[test]
+fn huge_and_small_costs_mixed_stay_consistent() {
+    for (big, seed) in [(1e17, 0u64), (3.3e16, 1), (1e20, 2), (7e250, 3)] {
+        let n = 24;
+        let m = CostMatrix::from_fn(n, |i, j| {
+            if i == j {
+                0.0
+            } else if (i * 5 + j * 3 + seed as usize).is_multiple_of(4) {
+                big * (1.0 + ((i + 2 * j) % 7) as f64 / 10.0)
+            } else {
+                1.0 + ((i * 13 + j * 7) % 17) as f64 * 0.37
+            }
+        })
+        .unwrap();
+        let solver = heuristic_only(seed);
+        for closed in [false, true] {
+            let t = if closed {
+                solver.closed_tour(&m, 0)
+            } else {
+                solver.open_path(&m, 0, None)
+            }
+            .unwrap();
+            assert!(is_permutation(&t.order, n));
+            let priced = if closed {
+                m.tour_cost(&t.order)
+            } else {
+                m.path_cost(&t.order)
+            }
+            .unwrap();
+            assert_eq!(priced, t.cost, "big {big} closed {closed}");
+            let nn = nearest_neighbour_route(&m, 0, None, closed).unwrap();
+            assert!(t.cost <= nn.cost, "big {big}: {} > {}", t.cost, nn.cost);
+        }
+    }
+}
+
+/// Issue 21: a time budget of `i64::MAX` seconds validated and then
+/// panicked ("overflow when adding duration to instant"); a kick budget of
+/// `kicks_per_pair = 1e300` validated and never returned. Both are now
+/// rejected when the configuration is built, naming the field and the limit.
+#[test]
+fn unbounded_budgets_are_rejected_with_their_limit() {
+    use sornav_tsp::{MAX_KICKS_PER_NODE, MAX_KICKS_PER_PAIR, MAX_TIME_BUDGET};
+    use std::time::Duration;
+    let reject = |config: SolverConfig, field: &str| match Solver::new(config) {
+        Err(TspError::InvalidConfig(msg)) => {
+            assert!(msg.contains(field) && msg.contains("limit"), "{msg}");
+        }
+        other => panic!("{field}: expected InvalidConfig, got {other:?}"),
+    };
+    reject(
+        SolverConfig {
+            time_budget: Some(Duration::from_secs(i64::MAX as u64)),
+            ..SolverConfig::default()
+        },
+        "time_budget",
+    );
+    reject(
+        SolverConfig {
+            kicks_per_pair: 1e300,
+            ..SolverConfig::default()
+        },
+        "kicks_per_pair",
+    );
+    reject(
+        SolverConfig {
+            kicks_per_node: MAX_KICKS_PER_NODE + 1,
+            ..SolverConfig::default()
+        },
+        "kicks_per_node",
+    );
+    // At the limits the solver is built and finishes.
+    let at_limits = Solver::new(SolverConfig {
+        kicks_per_node: MAX_KICKS_PER_NODE,
+        kicks_per_pair: MAX_KICKS_PER_PAIR,
+        ..SolverConfig::default()
+    })
+    .unwrap();
+    let m = build(30, Shape::Euclidean, 2);
+    assert!(is_permutation(
+        &at_limits.open_path(&m, 0, None).unwrap().order,
+        30
+    ));
+    // With a time budget (up to its limit) the kick count is free: the
+    // budget ends the search.
+    let budgeted = Solver::new(SolverConfig {
+        kicks_per_pair: 1e300,
+        time_budget: Some(Duration::from_millis(20)),
+        ..SolverConfig::default()
+    })
+    .unwrap();
+    let began = std::time::Instant::now();
+    assert!(is_permutation(
+        &budgeted.closed_tour(&m, 0).unwrap().order,
+        30
+    ));
+    assert!(began.elapsed() < Duration::from_secs(5));
+    assert!(
+        Solver::new(SolverConfig {
+            time_budget: Some(MAX_TIME_BUDGET),
+            ..SolverConfig::default()
+        })
+        .is_ok()
+    );
+}

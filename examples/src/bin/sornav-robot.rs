@@ -38,15 +38,32 @@ struct Args {
     /// Target to search at start (overrides `initial_target`).
     #[arg(long)]
     target: Option<String>,
-    /// ROS domain id (overrides `ros.domain_id`).
+    /// ROS domain id (overrides `ROS_DOMAIN_ID`, which overrides
+    /// `ros.domain_id`).
     #[arg(long)]
     domain_id: Option<u16>,
     /// Print the example configuration and exit.
     #[arg(long)]
     print_config: bool,
-    /// Print the status JSON every this many seconds (0: never).
-    #[arg(long, default_value_t = 5.0)]
+    /// Print the status JSON every this many seconds (0: never; at most
+    /// one day).
+    #[arg(long, default_value_t = 5.0, value_parser = parse_status_every)]
     status_every_s: f64,
+}
+
+/// Longest accepted `--status-every-s`: one day.
+const MAX_STATUS_EVERY_S: f64 = 86_400.0;
+
+/// `--status-every-s`: finite, in `[0, MAX_STATUS_EVERY_S]` (`inf` and
+/// `1e300` panicked converting to a duration once the node was up).
+fn parse_status_every(s: &str) -> Result<f64, String> {
+    let v: f64 = s.trim().parse().map_err(|e| format!("{e}"))?;
+    if !(0.0..=MAX_STATUS_EVERY_S).contains(&v) {
+        return Err(format!(
+            "{v}: need a number of seconds from 0 (never) to {MAX_STATUS_EVERY_S}"
+        ));
+    }
+    Ok(v)
 }
 
 fn main() {
@@ -70,6 +87,10 @@ fn run() -> Result<(), String> {
     if let Some(t) = args.target {
         config.initial_target = Some(t);
     }
+    // --domain-id, else ROS_DOMAIN_ID, else the configuration's
+    config
+        .apply_ros_domain_id_env(std::env::var("ROS_DOMAIN_ID").ok().as_deref())
+        .map_err(|e| e.to_string())?;
     if let Some(d) = args.domain_id {
         config.ros.domain_id = d;
     }
@@ -96,4 +117,34 @@ fn run() -> Result<(), String> {
     let status = robot.bridge().status(robot.now());
     println!("{}", serde_json::to_string(&status).unwrap_or_default());
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::Parser;
+
+    use super::Args;
+
+    /// Issue 21: `--status-every-s inf` (or 1e300) panicked after the DDS
+    /// node was up; such values are now argument errors, found before any
+    /// DDS participant exists.
+    #[test]
+    fn status_interval_must_be_a_finite_bounded_number() {
+        for bad in ["inf", "1e300", "nan", "-1", "86400.5", "soon"] {
+            assert!(
+                Args::try_parse_from(["sornav-robot", "--status-every-s", bad]).is_err(),
+                "{bad} accepted"
+            );
+        }
+        for good in ["0", "5", "0.25", "86400"] {
+            let a = Args::try_parse_from(["sornav-robot", "--status-every-s", good]).unwrap();
+            assert_eq!(a.status_every_s, good.parse::<f64>().unwrap());
+        }
+        assert_eq!(
+            Args::try_parse_from(["sornav-robot"])
+                .unwrap()
+                .status_every_s,
+            5.0
+        );
+    }
 }

@@ -6,6 +6,8 @@
 
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Args, Parser, Subcommand};
 use sornav::AgentConfig;
@@ -151,6 +153,9 @@ struct RunArgs {
     #[arg(long)]
     quiet: bool,
 }
+
+/// Exit status of a run stopped by Ctrl-C (128 + SIGINT, as shells report).
+const EXIT_INTERRUPTED: i32 = 130;
 
 fn parse_shard(s: &str) -> Result<(usize, usize), String> {
     let (i, n) = s.split_once('/').ok_or("expected i/n, e.g. 0/4")?;
@@ -334,27 +339,64 @@ fn main() -> ExitCode {
                     return ExitCode::from(2);
                 }
             };
+            let stop = Arc::new(AtomicBool::new(false));
             let options = RunOptions {
                 out: cli.run.out.clone(),
                 jobs: cli.run.jobs.unwrap_or_else(|| {
-                    std::thread::available_parallelism().map_or(1, std::num::NonZero::get)
+                    std::thread::available_parallelism()
+                        .map_or(1, std::num::NonZero::get)
+                        .min(harness::MAX_JOBS)
                 }),
                 shard: cli.run.shard,
                 fresh: cli.run.fresh,
                 progress: !cli.run.quiet,
+                stop: Some(Arc::clone(&stop)),
             };
+            if let Err(e) = config.validate().and_then(|()| options.validate()) {
+                eprintln!("sornav-sim: {e}");
+                return ExitCode::from(2);
+            }
+            // First Ctrl-C: finish the episodes running, write the report;
+            // a second one ends the process at once.
+            let flag = Arc::clone(&stop);
+            let handler = ctrlc::set_handler(move || {
+                if flag.swap(true, Ordering::SeqCst) {
+                    eprintln!("sornav-sim: interrupted again; exiting without a report");
+                    std::process::exit(EXIT_INTERRUPTED);
+                }
+                eprintln!(
+                    "sornav-sim: interrupted; finishing the episodes running (Ctrl-C again to quit at once)"
+                );
+            });
+            if let Err(e) = handler {
+                tracing::warn!(
+                    "no Ctrl-C handler ({e}); an interrupt ends the run without a report"
+                );
+            }
             match harness::run(&config, &options) {
                 Ok(outcome) => {
                     let records = harness::read_records(&options.out.join("episodes.jsonl"))
                         .unwrap_or_default();
                     println!("{}", report::table(&summarize(&records, &config.variants)));
                     println!(
-                        "{} episodes run ({} already done) in {:.1} s; report: {}",
+                        "{} episodes run ({} already done{}) in {:.1} s; report: {}",
                         outcome.ran,
                         outcome.skipped,
+                        if outcome.failed > 0 {
+                            format!(", {} failed to start", outcome.failed)
+                        } else {
+                            String::new()
+                        },
                         outcome.wall_s,
                         outcome.report.display()
                     );
+                    if outcome.interrupted {
+                        eprintln!(
+                            "sornav-sim: interrupted: {} episodes recorded, {} not started; run the same command again to resume",
+                            outcome.ran, outcome.not_started
+                        );
+                        return ExitCode::from(EXIT_INTERRUPTED as u8);
+                    }
                     ExitCode::SUCCESS
                 }
                 Err(e) => {

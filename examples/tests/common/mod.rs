@@ -68,5 +68,6 @@ pub fn options(out: &Path, jobs: usize, shard: Option<(usize, usize)>, fresh: bo
         shard,
         fresh,
         progress: false,
+        stop: None,
     }
 }

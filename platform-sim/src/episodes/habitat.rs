@@ -16,6 +16,12 @@ use serde_json::{Map, Value};
 
 use super::EpisodeError;
 
+/// Most bytes of JSON text an episode file may hold (after decompression):
+/// 128 MiB (per-scene content files of the HM3D and MP3D ObjectNav
+/// datasets are a few MiB to a few tens of MiB). A 1.5 MB `.json.gz` could
+/// otherwise inflate to gigabytes.
+pub const MAX_EPISODE_FILE_BYTES: usize = 128 << 20;
+
 /// A whole dataset file (split or content file).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HabitatDataset {
@@ -159,11 +165,15 @@ impl HabitatDataset {
         })
     }
 
-    /// Reads a `.json` or `.json.gz` file (gzip is detected by its magic bytes).
+    /// Reads a `.json` or `.json.gz` file (gzip is detected by its magic
+    /// bytes). The JSON text, after decompression, may hold at most
+    /// [`MAX_EPISODE_FILE_BYTES`].
     ///
     /// # Errors
     /// [`EpisodeError::Io`] when the file cannot be read or decompressed,
-    /// [`EpisodeError::Json`] when it does not follow the schema.
+    /// [`EpisodeError::TooLarge`] when the file or its decompressed text
+    /// exceeds [`MAX_EPISODE_FILE_BYTES`], [`EpisodeError::Json`] when it
+    /// does not follow the schema.
     ///
     /// # Complexity
     /// O(file size).
@@ -172,12 +182,29 @@ impl HabitatDataset {
             path: path.to_path_buf(),
             source: e,
         };
-        let bytes = std::fs::read(path).map_err(io)?;
+        let too_large = || EpisodeError::TooLarge {
+            path: path.to_path_buf(),
+            limit: MAX_EPISODE_FILE_BYTES,
+        };
+        let limit = MAX_EPISODE_FILE_BYTES as u64;
+        let mut bytes = Vec::new();
+        std::fs::File::open(path)
+            .and_then(|f| f.take(limit + 1).read_to_end(&mut bytes))
+            .map_err(io)?;
+        if bytes.len() as u64 > limit {
+            return Err(too_large());
+        }
         let text = if bytes.starts_with(&[0x1f, 0x8b]) {
+            // Decompress at most one byte past the limit: a small file may
+            // inflate a thousandfold.
             let mut s = String::new();
             flate2::read::GzDecoder::new(&bytes[..])
+                .take(limit + 1)
                 .read_to_string(&mut s)
                 .map_err(io)?;
+            if s.len() as u64 > limit {
+                return Err(too_large());
+            }
             s
         } else {
             String::from_utf8(bytes).map_err(|e| EpisodeError::Json {

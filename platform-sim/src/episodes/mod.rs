@@ -18,7 +18,10 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 pub use generator::{GenerateError, GeneratorConfig, generate_episodes, goal_view_points};
-pub use habitat::{HabitatDataset, HabitatEpisode, HabitatGoal, goals_key, scene_file, scene_stem};
+pub use habitat::{
+    HabitatDataset, HabitatEpisode, HabitatGoal, MAX_EPISODE_FILE_BYTES, goals_key, scene_file,
+    scene_stem,
+};
 
 /// Errors of episode files and conversions.
 #[derive(Debug, thiserror::Error)]
@@ -31,6 +34,14 @@ pub enum EpisodeError {
         /// The underlying error.
         #[source]
         source: std::io::Error,
+    },
+    /// The file, or its decompressed text, exceeds the size limit.
+    #[error("{path}: more than {limit} bytes of JSON (MAX_EPISODE_FILE_BYTES)")]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The limit in bytes.
+        limit: usize,
     },
     /// The file is not valid JSON of Habitat's ObjectNav schema.
     #[error("{path}: {message}")]

@@ -246,7 +246,8 @@ pub fn request_body(
 /// [`LlmFailure::MalformedResponse`] when the body is not a chat completion
 /// with a string `choices[0].message.content`;
 /// [`LlmFailure::InvalidAnswer`] when the content is not exactly an
-/// [`LlmAnswer`] (invalid JSON, unknown action, extra fields).
+/// [`LlmAnswer`] (invalid JSON, unknown action, extra fields). A `reason`
+/// longer than [`MAX_REASON_CHARS`] is cut to that length.
 pub fn parse_answer(body: &str) -> Result<LlmAnswer, LlmFailure> {
     let v: Value = serde_json::from_str(body)
         .map_err(|e| LlmFailure::MalformedResponse(format!("body is not JSON: {e}")))?;
@@ -256,8 +257,33 @@ pub fn parse_answer(body: &str) -> Result<LlmAnswer, LlmFailure> {
         .ok_or_else(|| {
             LlmFailure::MalformedResponse("no string choices[0].message.content".into())
         })?;
-    serde_json::from_str(content.trim())
-        .map_err(|e| LlmFailure::InvalidAnswer(format!("{e}: {content:?}")))
+    let mut answer: LlmAnswer = serde_json::from_str(content.trim()).map_err(|e| {
+        LlmFailure::InvalidAnswer(format!("{e}: {:?}", clip(content, MAX_REASON_CHARS)))
+    })?;
+    if let Some(reason) = answer.reason.as_mut() {
+        *reason = clip(reason, MAX_REASON_CHARS);
+    }
+    Ok(answer)
+}
+
+/// Longest `reason` kept from an answer, in characters: longer ones are
+/// cut (and marked), so that a runaway model cannot grow decision logs,
+/// episode records and the answer cache without bound (5 MB reasons grew
+/// `episodes.jsonl` to 320 MB for 9 episodes). Invalid answers are quoted
+/// in their error at most this long too.
+pub const MAX_REASON_CHARS: usize = 500;
+
+/// `text` cut to at most `max` characters, with a marker saying how long it
+/// was when cut.
+fn clip(text: &str, max: usize) -> String {
+    match text.char_indices().nth(max) {
+        None => text.to_owned(),
+        Some((end, _)) => format!(
+            "{}... [cut: {} characters]",
+            &text[..end],
+            text.chars().count()
+        ),
+    }
 }
 
 /// Validates an answer against the snapshot it answers.
@@ -322,6 +348,44 @@ mod tests {
             json!(["continue_explore", "relocate_cluster"])
         );
         assert_eq!(s["properties"]["action"]["type"], "string");
+    }
+
+    /// Issue 21: a 5 MB reason was kept whole (and logged per decision).
+    #[test]
+    fn long_reasons_are_cut() {
+        let wrap = |c: &str| {
+            json!({"choices": [{"message": {"role": "assistant", "content": c}}]}).to_string()
+        };
+        let long = "é".repeat(5 << 20);
+        let answer = parse_answer(&wrap(
+            &json!({"action": "continue_explore", "reason": long}).to_string(),
+        ))
+        .unwrap();
+        let reason = answer.reason.unwrap();
+        assert!(reason.starts_with(&"é".repeat(MAX_REASON_CHARS)));
+        assert!(
+            reason.ends_with(&format!("[cut: {} characters]", 5 << 20)),
+            "{}",
+            &reason[reason.len() - 40..]
+        );
+        assert!(reason.chars().count() < MAX_REASON_CHARS + 40);
+        // at the limit: kept as it is
+        let exact = "r".repeat(MAX_REASON_CHARS);
+        let answer = parse_answer(&wrap(
+            &json!({"action": "continue_explore", "reason": exact}).to_string(),
+        ))
+        .unwrap();
+        assert_eq!(answer.reason.as_deref(), Some(exact.as_str()));
+        // an invalid answer quotes at most the limit of its content
+        match parse_answer(&wrap(&format!(
+            "{{\"action\":\"fly\",\"reason\":\"{}\"}}",
+            "x".repeat(1 << 20)
+        ))) {
+            Err(LlmFailure::InvalidAnswer(m)) => {
+                assert!(m.len() < 2 * MAX_REASON_CHARS, "{}", m.len())
+            }
+            other => panic!("expected an invalid answer, got {other:?}"),
+        }
     }
 
     #[test]
