@@ -689,8 +689,23 @@ impl<F: AgentFactory> SornavPolicy<F> {
                 // A re-dispatch with a new waypoint replaces the old one.
                 if self.debug {
                     let last = self.agent.as_ref().map(Agent::last_outcome);
+                    // The stairs mapped so far: lower -> upper end height
+                    // ("?" for a partly seen stair).
+                    let stairs: Vec<String> = self.agent.as_ref().map_or(Vec::new(), |a| {
+                        a.frontier_map()
+                            .stairs()
+                            .iter()
+                            .map(|s| {
+                                let open = if s.is_complete() { "" } else { "?" };
+                                format!(
+                                    "{:.2}->{:.2}{open}",
+                                    s.lower.position.z, s.upper.position.z
+                                )
+                            })
+                            .collect()
+                    });
                     eprintln!(
-                        "step {step} at ({:.2},{:.2},{:.2}) yaw {:.0} dispatch {id:?} {} wp ({:.2},{:.2},{:.2}) path {} last {:?}",
+                        "step {step} at ({:.2},{:.2},{:.2}) yaw {:.0} dispatch {id:?} {} wp ({:.2},{:.2},{:.2}) path {} stairs {stairs:?} last {:?}",
                         feet.x,
                         feet.y,
                         feet.z,
