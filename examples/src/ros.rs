@@ -44,8 +44,6 @@ pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, ctrlc::Error> {
 
 #[cfg(test)]
 mod tests {
-    use std::sync::{Arc, Mutex};
-
     use tracing_subscriber::layer::SubscriberExt;
 
     use super::DEFAULT_LOG_FILTER;
@@ -54,18 +52,7 @@ mod tests {
     /// crates at info.
     #[test]
     fn default_filter_keeps_rustdds_at_warn() {
-        #[derive(Clone, Default)]
-        struct Sink(Arc<Mutex<Vec<u8>>>);
-        impl std::io::Write for Sink {
-            fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-                self.0.lock().unwrap().extend_from_slice(b);
-                Ok(b.len())
-            }
-            fn flush(&mut self) -> std::io::Result<()> {
-                Ok(())
-            }
-        }
-        let sink = Sink::default();
+        let sink = sornav_test_support::log_capture::LogSink::default();
         let writer = sink.clone();
         let subscriber = tracing_subscriber::registry()
             .with(tracing_subscriber::EnvFilter::new(DEFAULT_LOG_FILTER))
@@ -80,7 +67,7 @@ mod tests {
             tracing::warn!(target: "ros2_client::distributions", "ROS_DISTRO is not set");
             tracing::info!(target: "sornav_platform_scout::bridge", "bridge info kept");
         });
-        let text = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+        let text = sink.text();
         assert!(!text.contains("HeartbeatFrag"), "{text}");
         assert!(!text.contains("ROS_DISTRO"), "{text}");
         assert!(

@@ -174,22 +174,9 @@ fn bad_inputs_are_rejected_and_counted() {
 /// at most once per cause and `REJECTION_WARN_INTERVAL`.
 #[test]
 fn rejections_are_counted_by_cause_and_logged_at_a_limited_rate() {
-    use std::sync::{Arc, Mutex};
     use tracing_subscriber::Layer as _;
     use tracing_subscriber::layer::SubscriberExt;
-
-    #[derive(Clone, Default)]
-    struct Sink(Arc<Mutex<Vec<u8>>>);
-    impl std::io::Write for Sink {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().unwrap().extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-    let sink = Sink::default();
+    let sink = sornav_test_support::log_capture::LogSink::default();
     let writer = sink.clone();
     let subscriber = tracing_subscriber::registry().with(
         tracing_subscriber::fmt::layer()
@@ -226,7 +213,7 @@ fn rejections_are_counted_by_cause_and_logged_at_a_limited_rate() {
     assert_eq!(s.rejections, expect);
     assert_eq!(s.bridge.rejected_messages, 52);
     assert_eq!(s.bridge.undecodable_samples, 2);
-    let log = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+    let log = sink.text();
     let lines = |needle: &str| log.lines().filter(|l| l.contains(needle)).count();
     // one warning at the burst's start, one after the interval (saying how
     // many were not logged), one per other cause

@@ -246,18 +246,7 @@ fn dropping_the_node_logs_no_dds_errors() {
     if !netns::isolate("dropping_the_node_logs_no_dds_errors") {
         return;
     }
-    #[derive(Clone, Default)]
-    struct Sink(Arc<std::sync::Mutex<Vec<u8>>>);
-    impl std::io::Write for Sink {
-        fn write(&mut self, b: &[u8]) -> std::io::Result<usize> {
-            self.0.lock().unwrap().extend_from_slice(b);
-            Ok(b.len())
-        }
-        fn flush(&mut self) -> std::io::Result<()> {
-            Ok(())
-        }
-    }
-    let sink = Sink::default();
+    let sink = sornav_test_support::log_capture::LogSink::default();
     let writer = sink.clone();
     // This process (the isolated child) runs only this test: the global
     // subscriber also receives RustDDS's `log` records.
@@ -279,7 +268,7 @@ fn dropping_the_node_logs_no_dds_errors() {
     });
     drop(robot);
     thread::sleep(Duration::from_millis(300));
-    let log = String::from_utf8(sink.0.lock().unwrap().clone()).unwrap();
+    let log = sink.text();
     // Leaving the multicast group fails in a namespace where joining it
     // failed (only `lo`, no multicast route): that is the test's network,
     // not the drop order.

@@ -13,6 +13,7 @@
 //! * [`shared_root`] only locates the root, without the rule.
 //! * [`chat_server`] is a loopback OpenAI-compatible server for the tests
 //!   of the LLM context policy.
+//! * [`log_capture::LogSink`] captures log output in memory.
 //! * [`netns`] runs DDS tests inside a private network namespace
 //!   (`unshare --net`, only `lo`).
 //!
@@ -27,6 +28,7 @@
 #![deny(missing_docs)]
 
 pub mod chat_server;
+pub mod log_capture;
 pub mod netns;
 
 use std::path::{Path, PathBuf};
