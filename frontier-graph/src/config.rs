@@ -268,6 +268,14 @@ pub struct LevelConfig {
     /// A chain of steps is a stair when it climbs or descends at least this
     /// (m, default 0.4) from the level it starts on.
     pub min_stair_rise: f64,
+    /// A partly seen stair may rise less than `min_stair_rise` over
+    /// walkable steps when the step-connected surfaces around it (walkable
+    /// or not) rise at least this (m, default 0.8, four to five risers)
+    /// from its level: a flight seen from the side, whose treads above the
+    /// camera or beyond the near edge are not observed, so that the walkable
+    /// chain ends after its first treads. Its open end is then the highest
+    /// walkable tread seen; standing there shows the flight.
+    pub min_stair_sighting_rise: f64,
     /// Cost (graph units, metres of path) added for climbing one stair
     /// (default 2).
     pub stair_cost_up: f64,
@@ -290,6 +298,7 @@ impl Default for LevelConfig {
             min_level_separation: 1.8,
             min_level_area: 3.0,
             min_stair_rise: 0.4,
+            min_stair_sighting_rise: 0.8,
             stair_cost_up: 2.0,
             stair_cost_down: 1.0,
             portal_radius: 0.8,
@@ -311,6 +320,7 @@ impl LevelConfig {
             self.min_level_separation,
             self.min_level_area,
             self.min_stair_rise,
+            self.min_stair_sighting_rise,
             self.stair_cost_up,
             self.stair_cost_down,
             self.portal_radius,
@@ -329,6 +339,9 @@ impl LevelConfig {
         }
         if self.min_stair_rise <= self.level_tolerance {
             return bad("min_stair_rise must exceed level_tolerance");
+        }
+        if self.min_stair_sighting_rise < self.min_stair_rise {
+            return bad("min_stair_sighting_rise must be at least min_stair_rise");
         }
         if self.portal_radius > 10.0 {
             return bad("portal_radius must be at most 10 m");

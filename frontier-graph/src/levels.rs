@@ -251,6 +251,15 @@ pub struct MultiLevelMap {
     /// `graph` is the composed multi-level graph (otherwise level 0's is
     /// current).
     composed: bool,
+    /// Level 0's mapped floor has reached `min_level_area` (until then it
+    /// may be a stair landing the robot started on; see `stairs`).
+    #[serde(default)]
+    first_level_established: bool,
+    /// Surface columns mapped at the last check of level 0's area: the
+    /// O(columns) check reruns only after the map grew by a tenth, so it
+    /// costs amortised O(1) per new column.
+    #[serde(skip)]
+    first_level_checked: usize,
 }
 
 impl MultiLevelMap {
@@ -272,6 +281,8 @@ impl MultiLevelMap {
             hubs: Hubs::default(),
             graph: FrontierGraph::default(),
             composed: false,
+            first_level_established: false,
+            first_level_checked: 0,
         })
     }
 
@@ -605,6 +616,18 @@ impl MultiLevelMap {
         if !self.surfaces.take_dirty() {
             return Ok(());
         }
+        let columns = self.surfaces.columns.len();
+        let due = !self.first_level_established
+            && columns > self.first_level_checked + self.first_level_checked / 10;
+        if due {
+            self.first_level_checked = columns;
+        }
+        if due && self.first_level_area() >= self.cfg.levels.min_level_area {
+            // The levels found so far stay; later ones need the full
+            // separation from level 0, which may change what is extracted.
+            self.first_level_established = true;
+            self.off_level.invalidate();
+        }
         let lc = &self.cfg.levels;
         #[allow(clippy::cast_possible_truncation)]
         let params = Params {
@@ -615,6 +638,8 @@ impl MultiLevelMap {
             min_level_separation: lc.min_level_separation,
             min_level_area: lc.min_level_area,
             min_stair_rise: lc.min_stair_rise,
+            min_sighting_rise: lc.min_stair_sighting_rise,
+            first_level_established: self.first_level_established,
         };
         let floors: Vec<f64> = self.levels().map(|l| l.floor_z).collect();
         let touched = self.surfaces.take_touched();
@@ -635,6 +660,28 @@ impl MultiLevelMap {
         }
         self.stairs = found.stairs;
         Ok(())
+    }
+
+    /// Mapped floor area (m²) of level 0: surface columns with a surface
+    /// within `level_tolerance` of its floor. O(mapped columns); only run
+    /// until it first reaches `min_level_area`.
+    fn first_level_area(&self) -> f64 {
+        let Some(z0) = self.maps.first().map(|m| m.config().grid.floor_z) else {
+            return 0.0;
+        };
+        let (clearance, tol) = (self.clearance(), self.cfg.levels.level_tolerance);
+        let flat = self
+            .surfaces
+            .columns
+            .keys()
+            .filter(|&&k| {
+                self.surfaces
+                    .surfaces(k, clearance)
+                    .any(|z| (f64::from(z) - z0).abs() <= tol)
+            })
+            .count();
+        let res = self.surfaces.resolution;
+        flat as f64 * res * res
     }
 
     /// Whether level `level`'s grid has a traversable cell within

@@ -29,12 +29,22 @@
 //!    `min_stair_rise` over walkable nodes beyond its levels: below the
 //!    lowest, above the highest, and from both sides of a pair not joined
 //!    yet (its far end is the walkable node farthest in height in that
-//!    direction; exploring it reveals more). A
+//!    direction; exploring it reveals more). A *sighted* flight needs less:
+//!    when the component's surfaces, walkable or not, reach
+//!    `min_sighting_rise` beyond the level, any walkable tread above the
+//!    level's tolerance is an open end (a flight seen from its side shows
+//!    its treads' edges step by step, but the footprint test passes only
+//!    on the first treads, whose tops the camera sees; standing there
+//!    shows the rest). A
 //!    sheer drop is never step-connected, so it stays an obstacle; furniture
 //!    tops are not attached (their edge is higher than a step).
 //! 5. Inside attached components, a flat area of at least `min_level_area`
 //!    at least `min_level_separation` away from every known floor is a new
-//!    level (the floor at the top or bottom of a stair).
+//!    level (the floor at the top or bottom of a stair). Level 0 is where
+//!    the robot started, which may be a stair's half landing: until its
+//!    mapped floor reaches `min_level_area`, a new level needs only
+//!    `min_stair_rise` from it (the floors half a storey above and below a
+//!    landing are levels).
 //!
 //! # Complexity
 //! Run when the surface map has changed: O(T log C) to bring the set of C
@@ -136,6 +146,11 @@ pub(crate) struct Params {
     pub min_level_separation: f64,
     pub min_level_area: f64,
     pub min_stair_rise: f64,
+    pub min_sighting_rise: f64,
+    /// Level 0 (the first pose's floor) has at least `min_level_area` of
+    /// mapped floor. Until then it may be a stair's landing: new levels
+    /// need only `min_stair_rise` from it, not `min_level_separation`.
+    pub first_level_established: bool,
 }
 
 /// What [`extract`] found.
@@ -563,9 +578,16 @@ pub(crate) fn extract(
             let count = b - a + 1;
             if count as f64 * cell_area >= p.min_level_area {
                 let h = f64::from(zs[(a + b) / 2]);
-                let far = levels
+                let far = levels.iter().enumerate().all(|(l, z)| {
+                    let gap = if l == 0 && !p.first_level_established {
+                        p.min_stair_rise
+                    } else {
+                        p.min_level_separation
+                    };
+                    (z - h).abs() >= gap
+                }) && out
+                    .new_levels
                     .iter()
-                    .chain(out.new_levels.iter())
                     .all(|l| (l - h).abs() >= p.min_level_separation);
                 if far {
                     out.new_levels.push(h);
@@ -590,8 +612,28 @@ pub(crate) fn extract(
         // walkable chain, a partly seen stair from each side; and the
         // partly seen continuations below the lowest and above the
         // highest level.
+        // How far the component's surfaces (walkable or not) reach above
+        // and below: a flight seen from the side shows few walkable treads
+        // but many step-connected ones.
+        let (lo, hi) = zs
+            .first()
+            .zip(zs.last())
+            .map_or((0.0, 0.0), |(a, b)| (f64::from(*a), f64::from(*b)));
         let run = |start: usize, goal: Option<usize>, dir: f32| {
-            chain(&off, &walk, &nodes, cf, levels, start, goal, dir, map, p)
+            let reach = if dir > 0.0 {
+                hi - levels[start]
+            } else {
+                levels[start] - lo
+            };
+            let min_rise = if reach >= p.min_sighting_rise {
+                // Sighted: any walkable tread above the level's tolerance.
+                f64::from(p.level_tolerance)
+            } else {
+                p.min_stair_rise
+            };
+            chain(
+                &off, &walk, &nodes, cf, levels, start, goal, dir, map, p, min_rise,
+            )
         };
         for w in attached.windows(2) {
             match run(w[0], Some(w[1]), 1.0) {
@@ -634,8 +676,7 @@ fn point(map: &SurfaceMap, k: ColumnKey, z: f64) -> Point3<f64> {
 /// Dijkstra over the walkable nodes of one component from the feet on
 /// `start` to the feet on `goal` (`None` when they are not joined), or,
 /// without a goal level, to the node farthest from `start` in the
-/// direction `dir` (+1 up, -1 down) when it rises at least
-/// `min_stair_rise`.
+/// direction `dir` (+1 up, -1 down) when it rises at least `min_rise`.
 #[allow(clippy::too_many_arguments)]
 fn chain(
     off: &[(ColumnKey, f32)],
@@ -648,6 +689,7 @@ fn chain(
     dir: f32,
     map: &SurfaceMap,
     p: &Params,
+    min_rise: f64,
 ) -> Option<Stair> {
     let node_point = |i: usize| point(map, off[i].0, f64::from(off[i].1));
     // Dijkstra state keyed by node index.
@@ -714,7 +756,7 @@ fn chain(
         (None, Some(_)) => return None,
         _ => {
             let (i, _) = best_end?;
-            if (f64::from(off[i].1) - hs).abs() < p.min_stair_rise {
+            if (f64::from(off[i].1) - hs).abs() < min_rise {
                 return None;
             }
             (i, None)
@@ -801,6 +843,8 @@ mod tests {
             min_level_separation: 1.5,
             min_level_area: 2.0,
             min_stair_rise: 0.5,
+            min_sighting_rise: 0.8,
+            first_level_established: true,
         }
     }
 
@@ -834,5 +878,50 @@ mod tests {
                 prop_assert_eq!(&cached.cols, &full.cols);
             }
         }
+    }
+
+    /// A flight seen from its side: every tread's top on a 0.2 m strip
+    /// along its near edge, the floor under the flight elsewhere past its
+    /// first two treads (what a camera beside an open flight sees). Only
+    /// the first two treads are walkable (0.36 m, under `min_stair_rise`);
+    /// with eight treads the step-connected strip reaches 1.44 m, a
+    /// sighted flight whose open end is the second tread; with four (0.72
+    /// m, under `min_sighting_rise`) it is not a stair.
+    #[test]
+    fn a_flight_seen_from_its_side_is_sighted() {
+        let p = params();
+        let side_view = |treads: usize| {
+            let mut map = SurfaceMap::new(0.1);
+            let mut points = Vec::new();
+            for kx in 0..30 {
+                for ky in 0..50 {
+                    let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                    let tread = if (1.0..1.0 + 0.25 * treads as f64).contains(&y) {
+                        Some(((y - 1.0) / 0.25).floor() as usize + 1)
+                    } else {
+                        None
+                    };
+                    let z = match tread {
+                        Some(i) if (1.0..2.0).contains(&x) && (x < 1.2 || i <= 2) => {
+                            0.18 * i as f64
+                        }
+                        _ => 0.0,
+                    };
+                    points.push(Point3::new(x, y, z));
+                }
+            }
+            map.integrate(&Point3::new(1.5, 2.5, 6.0), &points, 10.0);
+            let mut off = OffLevelColumns::default();
+            let touched = map.take_touched();
+            off.update(&map, &touched, &[0.0], &p);
+            extract(&map, &mut off, &[0.0], &p)
+        };
+        let found = side_view(8);
+        assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
+        let s = &found.stairs[0];
+        assert_eq!(s.lower.level, Some(LevelId(0)));
+        let open = s.open_end().expect("a partly seen stair");
+        assert!((open.position.z - 0.36).abs() < 1e-4, "{:?}", open.position);
+        assert!(side_view(4).stairs.is_empty());
     }
 }

@@ -499,6 +499,21 @@ impl StairReference {
         })
     }
 
+    /// The off-level nodes step-connected to off-level node `i` (its
+    /// component, walkable or not), by breadth-first search.
+    fn component(&self, i: usize) -> Vec<usize> {
+        let mut seen = BTreeSet::from([i]);
+        let mut queue = VecDeque::from([i]);
+        while let Some(j) = queue.pop_front() {
+            for k in self.steps(j) {
+                if self.nodes[k].level.is_none() && seen.insert(k) {
+                    queue.push_back(k);
+                }
+            }
+        }
+        seen.into_iter().collect()
+    }
+
     /// The surface height of `level` in column `col` (where a stair's end
     /// stands: the real surface, within the level tolerance of the floor).
     fn foot_z(&self, level: usize, col: (i32, i32)) -> Option<f64> {
@@ -693,7 +708,20 @@ proptest! {
                     prop_assert!((s.length - d).abs() <= 1e-9 * d.max(1.0), "partial stair {} vs reference {}; {}", s.length, d, ctx);
                     let hs = r.floors[sl];
                     let rise = |i: usize| (f64::from(r.nodes[i].z) - hs).abs();
-                    prop_assert!(rise(open) >= cfg.levels.min_stair_rise, "{}", ctx);
+                    // A sighted flight: the step-connected off-level
+                    // surfaces around it (walkable or not) reach
+                    // `min_stair_sighting_rise` beyond the level; then any
+                    // walkable tread off the level is an open end.
+                    let dir = if far.position.z >= start.position.z { 1.0 } else { -1.0 };
+                    let reach = r.component(ids[0]).into_iter()
+                        .map(|i| (f64::from(r.nodes[i].z) - hs) * dir)
+                        .fold(f64::NEG_INFINITY, f64::max);
+                    let min_rise = if reach >= cfg.levels.min_stair_sighting_rise {
+                        f64::from(cfg.levels.level_tolerance as f32)
+                    } else {
+                        cfg.levels.min_stair_rise
+                    };
+                    prop_assert!(rise(open) >= min_rise, "open end rises {} < {}; {}", rise(open), min_rise, ctx);
                     let top = dist.keys().map(|&i| rise(i)).fold(0.0, f64::max);
                     prop_assert!(rise(open) >= top - 1e-6, "open end rises {} < {}; {}", rise(open), top, ctx);
                 }
@@ -734,5 +762,62 @@ proptest! {
             prop_assert!(lowest >= f.z - map.config().grid.step_height - 1e-6,
                 "from {:?} the path goes down to {}; {}", f, lowest, ctx);
         }
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(8))]
+
+    /// A robot that starts on a stair's half landing takes it for level 0
+    /// (its first pose); the floors half a storey below and above are
+    /// closer to it than `min_level_separation`, but the landing is
+    /// smaller than `min_level_area`, so both still become levels and
+    /// complete stairs join the landing to each (before, the agent kept
+    /// the floors as "stair surfaces" and never left the landing's flights).
+    #[test]
+    fn a_robot_starting_on_a_half_landing_finds_both_floors(
+        (rise, tread, width, turn) in (0.12f64..0.19, 0.25f64..0.32, 0.9f64..1.2, 0u8..4),
+        walls in (any::<bool>(), any::<bool>()),
+    ) {
+        let scene = Scene::new(SceneParams {
+            rise,
+            tread,
+            width,
+            turn,
+            offset: (0.0, 0.0),
+            landing: true,
+            walls,
+            platform: None,
+            table: false,
+            across: 0.5,
+        });
+        let ctx = describe(&scene);
+        // feet: floor 0 (2), the stair at 1/4, 1/2 (the landing's height),
+        // 3/4, floor 1 (2). Start on the landing, go up, then down.
+        let order = [3usize, 4, 5, 6, 3, 2, 1, 0, 3];
+        let mut map = MultiLevelMap::new(ml_config()).unwrap();
+        let range = map.config().grid.max_range;
+        for &i in &order {
+            let f = scene.feet[i];
+            let eye = f + Vector3::new(0.0, 0.0, EYE);
+            let pts = scene.scan(&eye, 0.07, 4.8, range);
+            map.update(&f, &eye, &pts).unwrap();
+            map.frontier_graph(&f).unwrap();
+        }
+        let tol = map.config().levels.level_tolerance;
+        let landing = scene.feet[3].z;
+        let floors: Vec<f64> = map.levels().map(|l| l.floor_z).collect();
+        prop_assert!((floors[0] - landing).abs() < 1e-9, "{:?}; {}", floors, ctx);
+        let level_near = |z: f64| floors.iter().position(|f| (f - z).abs() <= tol);
+        let (Some(low), Some(high)) = (level_near(0.0), level_near(scene.h)) else {
+            return Err(TestCaseError::fail(format!("floors {floors:?} miss 0 or {}; {ctx}", scene.h)));
+        };
+        let joined: BTreeSet<(usize, usize)> = map
+            .stairs()
+            .iter()
+            .filter(|s| s.is_complete())
+            .map(|s| (usize::from(s.lower.level.unwrap().0), usize::from(s.upper.level.unwrap().0)))
+            .collect();
+        prop_assert!(joined.contains(&(low, 0)) && joined.contains(&(0, high)), "joined {:?}; {}", joined, ctx);
     }
 }
