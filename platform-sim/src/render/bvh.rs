@@ -49,18 +49,19 @@ pub const MAX_LEAF: usize = 4;
 const BINS: usize = 16;
 /// Relative enlargement of the far slab distance that makes box tests
 /// conservative under f32 rounding (`1 + 2 gamma(3)`, Ize 2013).
-const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+pub(super) const ROBUST_FAR: f32 =
+    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// `max` as one instruction (operands are never NaN here: reciprocals are
 /// clamped to finite values).
 #[inline(always)]
-fn fmax(a: f32, b: f32) -> f32 {
+pub(super) fn fmax(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
 /// `min` as one instruction (see [`fmax`]).
 #[inline(always)]
-fn fmin(a: f32, b: f32) -> f32 {
+pub(super) fn fmin(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
@@ -118,11 +119,11 @@ impl Bounds {
 /// node, `index` is the right child, `count == 0`. Leaves: triangles
 /// `index..index + count` of [`Bvh::triangles`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-struct Node {
-    min: [f32; 3],
-    index: u32,
-    max: [f32; 3],
-    count: u32,
+pub(super) struct Node {
+    pub(super) min: [f32; 3],
+    pub(super) index: u32,
+    pub(super) max: [f32; 3],
+    pub(super) count: u32,
 }
 
 /// A triangle in leaf order: its vertices and two payloads (48 bytes).
@@ -158,15 +159,15 @@ pub struct BvhHit {
 /// A ray prepared for traversal.
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedRay {
-    origin: [f32; 3],
-    dir: [f32; 3],
-    inv: [f32; 3],
+    pub(super) origin: [f32; 3],
+    pub(super) dir: [f32; 3],
+    pub(super) inv: [f32; 3],
     /// Sign of each direction component (1 when negative).
-    neg: [usize; 3],
+    pub(super) neg: [usize; 3],
     /// Dominant axis of the direction (Woop's kz).
-    kz: usize,
+    pub(super) kz: usize,
     /// Shear constants (Woop's Sx, Sy, Sz).
-    shear: [f32; 3],
+    pub(super) shear: [f32; 3],
 }
 
 impl PreparedRay {
@@ -192,6 +193,7 @@ impl PreparedRay {
 
     /// Prepares a ray for [`Bvh::intersect_prepared`]; `None` for a zero or
     /// non-finite direction or a non-finite origin.
+    #[inline]
     pub fn new(origin: [f32; 3], dir: [f32; 3]) -> Option<PreparedRay> {
         if !origin.iter().chain(dir.iter()).all(|c| c.is_finite()) || dir.iter().all(|c| *c == 0.0)
         {
@@ -225,7 +227,7 @@ impl PreparedRay {
 
     /// Entry distance of the ray into a node's box, or `f32::INFINITY` on a miss.
     #[inline(always)]
-    fn enter(&self, n: &Node, t_max: f32) -> f32 {
+    pub(super) fn enter(&self, n: &Node, t_max: f32) -> f32 {
         let lo = |a: usize| if self.neg[a] == 0 { n.min[a] } else { n.max[a] };
         let hi = |a: usize| if self.neg[a] == 0 { n.max[a] } else { n.min[a] };
         let tx0 = (lo(0) - self.origin[0]) * self.inv[0];
@@ -461,12 +463,41 @@ impl Bvh {
         t_max: f32,
         out: &mut [Option<BvhHit>],
     ) {
+        self.packet_chunks(rays, t_min, t_max, out, true);
+    }
+
+    /// [`Bvh::intersect_packet`] with the scalar kernels only: the same ranged
+    /// traversal, rays tested one by one in the leaves. This is the reference
+    /// the 8-lane SIMD path is checked against bit for bit (same `t`, same
+    /// leaf slot for every ray); it is also what packets whose rays do not
+    /// share their dominant axis use.
+    ///
+    /// # Complexity
+    /// As [`Bvh::intersect_packet`].
+    pub fn intersect_packet_scalar(
+        &self,
+        rays: &[PreparedRay],
+        t_min: f32,
+        t_max: f32,
+        out: &mut [Option<BvhHit>],
+    ) {
+        self.packet_chunks(rays, t_min, t_max, out, false);
+    }
+
+    fn packet_chunks(
+        &self,
+        rays: &[PreparedRay],
+        t_min: f32,
+        t_max: f32,
+        out: &mut [Option<BvhHit>],
+        simd: bool,
+    ) {
         for (rays, out) in rays.chunks(MAX_PACKET).zip(out.chunks_mut(MAX_PACKET)) {
             let n = rays.len().min(out.len());
             let mut tmax = [t_max; MAX_PACKET];
             let mut slot = [u32::MAX; MAX_PACKET];
             if t_max > t_min {
-                self.packet(&rays[..n], t_min, &mut tmax[..n], &mut slot[..n]);
+                self.packet(&rays[..n], t_min, &mut tmax[..n], &mut slot[..n], simd);
             }
             for i in 0..n {
                 out[i] = (slot[i] != u32::MAX).then(|| self.hit_at(slot[i] as usize, tmax[i]));
@@ -474,15 +505,30 @@ impl Bvh {
         }
     }
 
-    fn packet(&self, rays: &[PreparedRay], t_min: f32, tmax: &mut [f32], slot: &mut [u32]) {
+    /// The flattened nodes (for the SIMD kernels).
+    pub(super) fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    fn packet(
+        &self,
+        rays: &[PreparedRay],
+        t_min: f32,
+        tmax: &mut [f32],
+        slot: &mut [u32],
+        simd: bool,
+    ) {
         let Some(r0) = rays.first() else { return };
         // Specialise the triangle test once when all rays share their dominant
         // axis (nearly always for camera tiles); 3 = per-ray dispatch.
-        match rays.iter().all(|r| r.kz == r0.kz).then_some(r0.kz) {
-            Some(0) => self.packet_kz::<0>(rays, t_min, tmax, slot),
-            Some(1) => self.packet_kz::<1>(rays, t_min, tmax, slot),
-            Some(_) => self.packet_kz::<2>(rays, t_min, tmax, slot),
-            None => self.packet_kz::<3>(rays, t_min, tmax, slot),
+        match (rays.iter().all(|r| r.kz == r0.kz).then_some(r0.kz), simd) {
+            (Some(0), true) => super::packet8::packet::<0>(self, rays, t_min, tmax, slot),
+            (Some(1), true) => super::packet8::packet::<1>(self, rays, t_min, tmax, slot),
+            (Some(_), true) => super::packet8::packet::<2>(self, rays, t_min, tmax, slot),
+            (Some(0), false) => self.packet_kz::<0>(rays, t_min, tmax, slot),
+            (Some(1), false) => self.packet_kz::<1>(rays, t_min, tmax, slot),
+            (Some(_), false) => self.packet_kz::<2>(rays, t_min, tmax, slot),
+            (None, _) => self.packet_kz::<3>(rays, t_min, tmax, slot),
         }
     }
 
@@ -647,7 +693,13 @@ impl Bvh {
 /// ray with origin `o` and reciprocal directions in `[imin, imax]` (same sign
 /// per axis) enters the node's box before `t_max`.
 #[inline(always)]
-fn frustum_enters(nd: &Node, o: &[f32; 3], imin: &[f32; 3], imax: &[f32; 3], t_max: f32) -> bool {
+pub(super) fn frustum_enters(
+    nd: &Node,
+    o: &[f32; 3],
+    imin: &[f32; 3],
+    imax: &[f32; 3],
+    t_max: f32,
+) -> bool {
     let mut tn = 0.0f32;
     let mut tf = t_max;
     for a in 0..3 {
@@ -668,7 +720,7 @@ fn frustum_enters(nd: &Node, o: &[f32; 3], imin: &[f32; 3], imax: &[f32; 3], t_m
 }
 
 /// Maximum tree depth; the traversal stack holds one entry per level.
-const MAX_DEPTH: usize = 60;
+pub(super) const MAX_DEPTH: usize = 60;
 
 /// Scene diagonal / this = the largest box extent a triangle reference may keep.
 const SPLIT_DIVISOR: f64 = 32.0;
