@@ -183,10 +183,14 @@ pub(super) fn packet<const KZ: usize>(
     }
     let frustum =
         rays.iter().all(|r| r.origin == o) && (0..3).all(|a| (imin[a] > 0.0) == (imax[a] > 0.0));
+    // Largest t_max of the packet (padding lanes hold -inf); only compared
+    // against, so the order of the reduction does not matter.
     let packet_max = |gt: &[f32x8]| {
         gt[..groups]
             .iter()
-            .flat_map(|v| v.to_array())
+            .fold(f32x8::ZERO, |m, v| m.fast_max(*v))
+            .to_array()
+            .into_iter()
             .fold(0.0f32, fmax)
     };
     let mut pmax = packet_max(&gt);
