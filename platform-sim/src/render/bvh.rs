@@ -69,7 +69,7 @@ pub(super) fn fmax(a: f32, b: f32) -> f32 {
 
 /// `min` as one instruction (see [`fmax`]).
 #[inline(always)]
-pub(super) fn fmin(a: f32, b: f32) -> f32 {
+fn fmin(a: f32, b: f32) -> f32 {
     if a < b { a } else { b }
 }
 
@@ -554,17 +554,7 @@ impl Bvh {
         slot: &mut [u32],
     ) {
         let n = rays.len();
-        let o = rays[0].origin;
-        let mut imin = [f32::INFINITY; 3];
-        let mut imax = [f32::NEG_INFINITY; 3];
-        for r in rays {
-            for a in 0..3 {
-                imin[a] = fmin(r.inv[a], imin[a]);
-                imax[a] = fmax(r.inv[a], imax[a]);
-            }
-        }
-        let frustum = rays.iter().all(|r| r.origin == o)
-            && (0..3).all(|a| (imin[a] > 0.0) == (imax[a] > 0.0));
+        let frustum = Frustum::of(rays);
         let packet_max = |tmax: &[f32]| tmax.iter().fold(0.0f32, |m, &t| fmax(m, t));
         let mut pmax = packet_max(tmax);
         let mut stack = [(0u32, 0u32); MAX_DEPTH + 4];
@@ -573,7 +563,7 @@ impl Bvh {
         let mut first = 0usize;
         loop {
             let nd = &self.nodes[node];
-            let mut visit = !frustum || frustum_enters(nd, &o, &imin, &imax, pmax);
+            let mut visit = frustum.is_none_or(|f| f.enters(nd, pmax));
             if visit {
                 while first < n && rays[first].enter(nd, tmax[first]) == f32::INFINITY {
                     first += 1;
@@ -605,16 +595,7 @@ impl Bvh {
                     }
                     pmax = packet_max(tmax);
                 } else {
-                    let left = node + 1;
-                    let right = nd.index as usize;
-                    let r = &rays[first];
-                    let tl = r.enter(&self.nodes[left], f32::INFINITY);
-                    let tr = r.enter(&self.nodes[right], f32::INFINITY);
-                    let (near, far) = if tl <= tr {
-                        (left, right)
-                    } else {
-                        (right, left)
-                    };
+                    let (near, far) = self.ordered_children(node, &rays[first]);
                     stack[sp] = (far as u32, first as u32);
                     sp += 1;
                     node = near;
@@ -627,6 +608,21 @@ impl Bvh {
             sp -= 1;
             node = stack[sp].0 as usize;
             first = stack[sp].1 as usize;
+        }
+    }
+
+    /// The children of inner node `node` as (near, far): ordered by the
+    /// entry distance of `ray` into their boxes (left first on ties).
+    #[inline(always)]
+    pub(super) fn ordered_children(&self, node: usize, ray: &PreparedRay) -> (usize, usize) {
+        let left = node + 1;
+        let right = self.nodes[node].index as usize;
+        let tl = ray.enter(&self.nodes[left], f32::INFINITY);
+        let tr = ray.enter(&self.nodes[right], f32::INFINITY);
+        if tl <= tr {
+            (left, right)
+        } else {
+            (right, left)
         }
     }
 
@@ -703,34 +699,57 @@ impl Bvh {
     }
 }
 
-/// Interval-arithmetic frustum test (Boulos et al. 2006): false only if no
-/// ray with origin `o` and reciprocal directions in `[imin, imax]` (same sign
-/// per axis) enters the node's box before `t_max`.
-#[inline(always)]
-pub(super) fn frustum_enters(
-    nd: &Node,
-    o: &[f32; 3],
-    imin: &[f32; 3],
-    imax: &[f32; 3],
-    t_max: f32,
-) -> bool {
-    let mut tn = 0.0f32;
-    let mut tf = t_max;
-    for a in 0..3 {
-        let c0 = nd.min[a] - o[a];
-        let c1 = nd.max[a] - o[a];
-        // Smallest and largest of c * inv over inv in [imin, imax].
-        let lo = |c: f32| if c >= 0.0 { c * imin[a] } else { c * imax[a] };
-        let hi = |c: f32| if c >= 0.0 { c * imax[a] } else { c * imin[a] };
-        let (near, far) = if imin[a] > 0.0 {
-            (lo(c0), hi(c1))
-        } else {
-            (lo(c1), hi(c0))
-        };
-        tn = fmax(tn, near);
-        tf = fmin(tf, far * ROBUST_FAR);
+/// The frustum of a packet whose rays share their origin and the signs of
+/// their direction components: the origin and per-axis bounds of the
+/// reciprocal directions.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Frustum {
+    o: [f32; 3],
+    imin: [f32; 3],
+    imax: [f32; 3],
+}
+
+impl Frustum {
+    /// The packet's frustum, or `None` when the rays do not share their
+    /// origin and direction signs (no frustum cull then).
+    pub(super) fn of(rays: &[PreparedRay]) -> Option<Frustum> {
+        let o = rays.first()?.origin;
+        let mut imin = [f32::INFINITY; 3];
+        let mut imax = [f32::NEG_INFINITY; 3];
+        for r in rays {
+            for a in 0..3 {
+                imin[a] = fmin(r.inv[a], imin[a]);
+                imax[a] = fmax(r.inv[a], imax[a]);
+            }
+        }
+        (rays.iter().all(|r| r.origin == o) && (0..3).all(|a| (imin[a] > 0.0) == (imax[a] > 0.0)))
+            .then_some(Frustum { o, imin, imax })
     }
-    tn <= tf
+
+    /// Interval-arithmetic frustum test (Boulos et al. 2006): false only if
+    /// no ray with this origin and reciprocal directions in `[imin, imax]`
+    /// (same sign per axis) enters the node's box before `t_max`.
+    #[inline(always)]
+    pub(super) fn enters(&self, nd: &Node, t_max: f32) -> bool {
+        let (o, imin, imax) = (&self.o, &self.imin, &self.imax);
+        let mut tn = 0.0f32;
+        let mut tf = t_max;
+        for a in 0..3 {
+            let c0 = nd.min[a] - o[a];
+            let c1 = nd.max[a] - o[a];
+            // Smallest and largest of c * inv over inv in [imin, imax].
+            let lo = |c: f32| if c >= 0.0 { c * imin[a] } else { c * imax[a] };
+            let hi = |c: f32| if c >= 0.0 { c * imax[a] } else { c * imin[a] };
+            let (near, far) = if imin[a] > 0.0 {
+                (lo(c0), hi(c1))
+            } else {
+                (lo(c1), hi(c0))
+            };
+            tn = fmax(tn, near);
+            tf = fmin(tf, far * ROBUST_FAR);
+        }
+        tn <= tf
+    }
 }
 
 /// Maximum tree depth; the traversal stack holds one entry per level.

@@ -33,7 +33,7 @@
 
 use wide::f32x8;
 
-use super::bvh::{Bvh, MAX_DEPTH, MAX_PACKET, Node, PreparedRay, ROBUST_FAR, fmax, frustum_enters};
+use super::bvh::{Bvh, Frustum, MAX_DEPTH, MAX_PACKET, Node, PreparedRay, ROBUST_FAR, fmax};
 
 /// Lanes per group.
 const W: usize = 8;
@@ -172,17 +172,7 @@ pub(super) fn packet<const KZ: usize>(
     });
     let t_min8 = f32x8::splat(t_min);
     let lane_from: [f32x8; W] = std::array::from_fn(lanes_from);
-    let o = rays[0].origin;
-    let mut imin = [f32::INFINITY; 3];
-    let mut imax = [f32::NEG_INFINITY; 3];
-    for r in rays {
-        for a in 0..3 {
-            imin[a] = super::bvh::fmin(r.inv[a], imin[a]);
-            imax[a] = fmax(r.inv[a], imax[a]);
-        }
-    }
-    let frustum =
-        rays.iter().all(|r| r.origin == o) && (0..3).all(|a| (imin[a] > 0.0) == (imax[a] > 0.0));
+    let frustum = Frustum::of(rays);
     // Largest t_max of the packet (padding lanes hold -inf); only compared
     // against, so the order of the reduction does not matter.
     let packet_max = |gt: &[f32x8]| {
@@ -202,7 +192,7 @@ pub(super) fn packet<const KZ: usize>(
     let mut first = 0usize;
     loop {
         let nd = &nodes[node];
-        let mut visit = !frustum || frustum_enters(nd, &o, &imin, &imax, pmax);
+        let mut visit = frustum.is_none_or(|f| f.enters(nd, pmax));
         if visit {
             // First ray at or after `first` that enters the node: usually
             // `first` itself (one scalar test), else a group at a time.
@@ -249,16 +239,7 @@ pub(super) fn packet<const KZ: usize>(
                 }
                 pmax = packet_max(&gt);
             } else {
-                let left = node + 1;
-                let right = nd.index as usize;
-                let r = &rays[first];
-                let tl = r.enter(&nodes[left], f32::INFINITY);
-                let tr = r.enter(&nodes[right], f32::INFINITY);
-                let (near, far) = if tl <= tr {
-                    (left, right)
-                } else {
-                    (right, left)
-                };
+                let (near, far) = bvh.ordered_children(node, &rays[first]);
                 stack[sp] = (far as u32, first as u32);
                 sp += 1;
                 node = near;
