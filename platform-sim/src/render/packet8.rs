@@ -200,7 +200,7 @@ pub(super) fn packet<const KZ: usize>(
                 && rays[first].enter(nd, gt[first / W].as_array()[first % W]) == f32::INFINITY
             {
                 first += 1;
-                if first % W == 0 {
+                if first.is_multiple_of(W) {
                     continue;
                 }
                 let k = first / W;
