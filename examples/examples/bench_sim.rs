@@ -3,19 +3,56 @@
 //! Habitat's 640x480. Prints one JSON line per resolution:
 //! `{"width","height","episodes","actions_mean","episode_s_p50",
 //! "s_per_500_actions","decision_ms_p50","decision_ms_p99","frame_ms_p50",
-//! "timeouts"}`.
+//! "timeouts","phases_s_per_500_actions"}`.
+//!
+//! `phases_s_per_500_actions` splits `s_per_500_actions` by phase:
+//! `render` (the camera: every observed pose is rendered again after the
+//! episode and timed alone, so the episode itself is not slowed), `policy`
+//! (`Policy::act` of the SOR-Nav adapter: the frame's conversion to an
+//! observation, the agent's `observe` (depth to points, occupancy and
+//! semantic integration, frontiers) and `step` (decision), waypoint
+//! following) and `other` (the rest: the simulator's motion and
+//! bookkeeping).
 //!
 //! `cargo run --release -p sornav-examples --example bench_sim [-- EPISODES]`
 
 use std::time::Instant;
+
+use nalgebra::Point3;
 
 use sornav_examples::adapter::{AdapterConfig, ConfigFactory, SornavPolicy};
 use sornav_examples::histogram::Histogram;
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
 use sornav_platform_sim::procedural::ProceduralConfig;
 use sornav_platform_sim::{
-    CameraConfig, Outcome, RunConfig, Scene, SimConfig, Simulator, run_episode,
+    Action, CameraConfig, Episode, Observation, Outcome, Policy, RunConfig, Scene, SimConfig,
+    Simulator, run_episode,
 };
+
+/// Delegates to a policy and records the camera pose of every observation,
+/// so the frames can be rendered again and timed alone.
+struct Recording<'a, P> {
+    inner: &'a mut P,
+    poses: Vec<(Point3<f64>, f64, f64)>,
+    /// Time spent in the inner policy's `act`, s.
+    act_s: f64,
+}
+
+impl<P: Policy> Policy for Recording<'_, P> {
+    fn reset(&mut self, sim: &Simulator, episode: &Episode) {
+        self.inner.reset(sim, episode);
+    }
+    fn needs_frames(&self) -> bool {
+        self.inner.needs_frames()
+    }
+    fn act(&mut self, obs: &Observation<'_>) -> Action {
+        self.poses.push((obs.position, obs.yaw, obs.pitch));
+        let t = Instant::now();
+        let action = self.inner.act(obs);
+        self.act_s += t.elapsed().as_secs_f64();
+        action
+    }
+}
 
 fn main() {
     let episodes: usize = std::env::args()
@@ -40,6 +77,7 @@ fn main() {
         };
         let (mut walls, mut actions, mut timeouts) = (Vec::new(), 0usize, 0usize);
         let (mut decision, mut frame) = (Histogram::new(), Histogram::new());
+        let (mut render_s, mut policy_s) = (0.0f64, 0.0f64);
         let mut seed = 100;
         while walls.len() < episodes {
             seed += 1;
@@ -67,11 +105,25 @@ fn main() {
                     break;
                 }
                 let mut policy = SornavPolicy::new(&factory, AdapterConfig::default());
+                let mut recording = Recording {
+                    inner: &mut policy,
+                    poses: Vec::new(),
+                    act_s: 0.0,
+                };
                 let t0 = Instant::now();
                 let r = pool
-                    .install(|| run_episode(&sim, e, &mut policy, &RunConfig::default()))
+                    .install(|| run_episode(&sim, e, &mut recording, &RunConfig::default()))
                     .expect("episode");
                 walls.push(t0.elapsed().as_secs_f64());
+                let camera = sim.camera();
+                let t1 = Instant::now();
+                pool.install(|| {
+                    for (p, yaw, pitch) in &recording.poses {
+                        std::hint::black_box(camera.render(&camera.pose_at(p, *yaw, *pitch), 0));
+                    }
+                });
+                render_s += t1.elapsed().as_secs_f64();
+                policy_s += recording.act_s;
                 actions += r.actions;
                 timeouts += usize::from(r.outcome == Outcome::Timeout);
                 let trace = policy.take_trace();
@@ -92,6 +144,11 @@ fn main() {
             "decision_ms_p99": decision.quantile(0.99),
             "frame_ms_p50": frame.quantile(0.5),
             "timeouts": timeouts,
+            "phases_s_per_500_actions": {
+                "render": render_s / actions as f64 * 500.0,
+                "policy": policy_s / actions as f64 * 500.0,
+                "other": (total - render_s - policy_s) / actions as f64 * 500.0,
+            },
         });
         println!("{line}");
     }

@@ -2,11 +2,14 @@
 //!
 //! ```text
 //! RAYON_NUM_THREADS=1 cargo run --release -p sornav-platform-sim --example bench_render -- \
-//!     [/tmp/sornav-pcld/house_tess40.obj] [width height]
+//!     [/tmp/sornav-pcld/house_tess40.obj | procedural[:SEED]] [width height]
 //! ```
 //! Inputs come from `../shared/tools/pcld-gen/make-inputs` (the OBJ's
 //! `g label_<id>` groups carry the labels). The camera follows the same 30-pose
-//! trajectory through the house as the peer figures (camera 0.88 m, HFOV 79 deg);
+//! trajectory through the house as the peer figures (camera 0.88 m, HFOV 79 deg).
+//! `procedural[:SEED]` renders instead the procedural house of `bench_episodes`
+//! (default configuration, seed 1 unless given) from 30 poses on its floor
+//! (see `procedural`).
 //! 5 repetitions of the 30 frames, the median is printed as one JSON line:
 //! `{"mesh","triangles","width","height","frames","ms_per_frame","rays_per_s"}`.
 //! Run it with `RAYON_NUM_THREADS=1` for the one-core figure.
@@ -15,6 +18,7 @@ use std::time::Instant;
 
 use nalgebra::Point3;
 use sornav_platform_sim::render::{Bvh, Camera, CameraConfig, CameraPose};
+use sornav_platform_sim::{NavMesh, NavMeshConfig, ProceduralConfig, Scene, SpanId};
 
 /// Vertices, triangles and one label per triangle.
 type LabelledMesh = (Vec<[f32; 3]>, Vec<[u32; 3]>, Vec<u32>);
@@ -106,6 +110,37 @@ fn trajectory(n: usize, height: f64) -> Vec<CameraPose> {
         .collect()
 }
 
+/// The procedural house `seed` (default configuration, as `bench_episodes`)
+/// and `n` poses on its floor spans (evenly spread over the span list,
+/// headings turning by 2.4 rad), camera 0.88 m above the floor.
+fn procedural(
+    seed: u64,
+    n: usize,
+    config: CameraConfig,
+) -> Result<(Camera, Vec<CameraPose>, usize), String> {
+    let scene = Scene::procedural(seed, &ProceduralConfig::default()).map_err(|e| e.to_string())?;
+    let nav = NavMesh::build(&scene, &NavMeshConfig::default()).map_err(|e| e.to_string())?;
+    let floor: Vec<SpanId> = (0..nav.span_count() as SpanId)
+        .filter(|s| nav.is_floor_span(*s))
+        .collect();
+    if floor.is_empty() {
+        return Err("no floor spans".into());
+    }
+    let poses = (0..n)
+        .map(|k| {
+            let p = nav.span_center(floor[k * floor.len() / n]);
+            CameraPose {
+                position: Point3::new(p.x, p.y, p.z + config.mount_height),
+                yaw: 2.4 * k as f64,
+                pitch: 0.0,
+            }
+        })
+        .collect();
+    let triangles = scene.triangles().len();
+    let camera = Camera::for_scene(&scene, config).map_err(|e| e.to_string())?;
+    Ok((camera, poses, triangles))
+}
+
 /// User + system CPU time of this process in seconds (Linux `/proc`; 10 ms
 /// resolution), or `None` elsewhere.
 fn process_cpu_s() -> Option<f64> {
@@ -126,24 +161,31 @@ fn main() -> Result<(), String> {
         .unwrap_or_else(|| "/tmp/sornav-pcld/house_tess40.obj".into());
     let width: u32 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(640);
     let height: u32 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(480);
-    let (v, f, labels) = load_obj(&path)?;
-    let t = Instant::now();
-    let bvh = Bvh::build(&v, &f, &labels).map_err(|e| e.to_string())?;
-    eprintln!(
-        "BVH: {} triangles, {} references, {} nodes, depth {}, built in {:.0} ms",
-        bvh.triangle_count(),
-        bvh.reference_count(),
-        bvh.node_count(),
-        bvh.depth(),
-        t.elapsed().as_secs_f64() * 1e3
-    );
     let config = CameraConfig {
         width,
         height,
         ..CameraConfig::default()
     };
-    let camera = Camera::new(bvh, config).map_err(|e| e.to_string())?;
-    let poses = trajectory(30, 0.88);
+    let (camera, poses, triangles) = if let Some(seed) = path.strip_prefix("procedural") {
+        let seed = seed.trim_start_matches(':').parse().unwrap_or(1);
+        procedural(seed, 30, config)?
+    } else {
+        let (v, f, labels) = load_obj(&path)?;
+        let camera = Camera::new(
+            Bvh::build(&v, &f, &labels).map_err(|e| e.to_string())?,
+            config,
+        )
+        .map_err(|e| e.to_string())?;
+        (camera, trajectory(30, 0.88), f.len())
+    };
+    let bvh = camera.bvh();
+    eprintln!(
+        "BVH: {} triangles, {} references, {} nodes, depth {}",
+        bvh.triangle_count(),
+        bvh.reference_count(),
+        bvh.node_count(),
+        bvh.depth(),
+    );
     // Warm-up (and a sanity figure: fraction of pixels with a depth return).
     let valid: usize = poses
         .iter()
@@ -183,7 +225,7 @@ fn main() -> Result<(), String> {
             .file_name()
             .and_then(|n| n.to_str())
             .unwrap_or("?"),
-        f.len(),
+        triangles,
         poses.len()
     );
     Ok(())

@@ -27,6 +27,14 @@
 //!   visits and 2 triangle tests per ray, but two box tests per visited node
 //!   held it near 3 M rays/s on one core. A packet shares node fetches and box
 //!   tests across 64 coherent rays, which lifts it to 13-15 M rays/s;
+//! * **8-lane SIMD kernels** for the packets (`packet8`, safe code on
+//!   `wide::f32x8`): the first-active-ray search, the leaf box cull (an
+//!   active-ray mask per group of 8 rays; groups without an active ray skip
+//!   the leaf) and the triangle test run over 8 rays at once, and camera
+//!   rows are prepared 8 rays at a time. The traversal order is the scalar
+//!   one node for node and every lane repeats the scalar IEEE operations, so
+//!   the results equal [`Bvh::intersect_packet_scalar`] bit for bit (tested
+//!   on random soups and camera tiles);
 //! * **ordered single-ray traversal** for incoherent queries (nearest child
 //!   first, far child skipped once a closer hit is known), with a per-ray
 //!   precomputed reciprocal direction and a stack on the call frame;
@@ -49,12 +57,13 @@ pub const MAX_LEAF: usize = 4;
 const BINS: usize = 16;
 /// Relative enlargement of the far slab distance that makes box tests
 /// conservative under f32 rounding (`1 + 2 gamma(3)`, Ize 2013).
-const ROBUST_FAR: f32 = 1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
+pub(super) const ROBUST_FAR: f32 =
+    1.0 + 2.0 * (3.0 * f32::EPSILON * 0.5) / (1.0 - 3.0 * f32::EPSILON * 0.5);
 
 /// `max` as one instruction (operands are never NaN here: reciprocals are
 /// clamped to finite values).
 #[inline(always)]
-fn fmax(a: f32, b: f32) -> f32 {
+pub(super) fn fmax(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
@@ -118,11 +127,11 @@ impl Bounds {
 /// node, `index` is the right child, `count == 0`. Leaves: triangles
 /// `index..index + count` of [`Bvh::triangles`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-struct Node {
-    min: [f32; 3],
-    index: u32,
-    max: [f32; 3],
-    count: u32,
+pub(super) struct Node {
+    pub(super) min: [f32; 3],
+    pub(super) index: u32,
+    pub(super) max: [f32; 3],
+    pub(super) count: u32,
 }
 
 /// A triangle in leaf order: its vertices and two payloads (48 bytes).
@@ -158,15 +167,15 @@ pub struct BvhHit {
 /// A ray prepared for traversal.
 #[derive(Debug, Clone, Copy)]
 pub struct PreparedRay {
-    origin: [f32; 3],
-    dir: [f32; 3],
-    inv: [f32; 3],
+    pub(super) origin: [f32; 3],
+    pub(super) dir: [f32; 3],
+    pub(super) inv: [f32; 3],
     /// Sign of each direction component (1 when negative).
-    neg: [usize; 3],
+    pub(super) neg: [usize; 3],
     /// Dominant axis of the direction (Woop's kz).
-    kz: usize,
+    pub(super) kz: usize,
     /// Shear constants (Woop's Sx, Sy, Sz).
-    shear: [f32; 3],
+    pub(super) shear: [f32; 3],
 }
 
 impl PreparedRay {
@@ -192,6 +201,7 @@ impl PreparedRay {
 
     /// Prepares a ray for [`Bvh::intersect_prepared`]; `None` for a zero or
     /// non-finite direction or a non-finite origin.
+    #[inline]
     pub fn new(origin: [f32; 3], dir: [f32; 3]) -> Option<PreparedRay> {
         if !origin.iter().chain(dir.iter()).all(|c| c.is_finite()) || dir.iter().all(|c| *c == 0.0)
         {
@@ -225,7 +235,7 @@ impl PreparedRay {
 
     /// Entry distance of the ray into a node's box, or `f32::INFINITY` on a miss.
     #[inline(always)]
-    fn enter(&self, n: &Node, t_max: f32) -> f32 {
+    pub(super) fn enter(&self, n: &Node, t_max: f32) -> f32 {
         let lo = |a: usize| if self.neg[a] == 0 { n.min[a] } else { n.max[a] };
         let hi = |a: usize| if self.neg[a] == 0 { n.max[a] } else { n.min[a] };
         let tx0 = (lo(0) - self.origin[0]) * self.inv[0];
@@ -437,7 +447,10 @@ impl Bvh {
     /// tile of primary rays), traversed together: `out[i]` receives the hit of
     /// `rays[i]` in `(t_min, t_max)`. Packets longer than [`MAX_PACKET`] are
     /// processed in chunks. Results equal those of [`Bvh::intersect_prepared`]
-    /// ray by ray.
+    /// ray by ray (up to ties: two triangles at exactly the same distance, or
+    /// one large triangle referenced from several leaves, may be reported
+    /// through a different triangle or leaf slot), and those of
+    /// [`Bvh::intersect_packet_scalar`] bit for bit (same `t`, same slot).
     ///
     /// # Algorithm
     /// Ranged packet traversal (Wald et al. 2001; Overbeck, Ramamoorthi and
@@ -447,6 +460,9 @@ impl Bvh {
     /// signs, otherwise rays are tested in order until one enters the node, and
     /// rays before it are inactive below it. Children are ordered by the first
     /// active ray. Node fetches and box tests are shared by the whole packet.
+    /// When all rays share their dominant axis (camera tiles, but for the few
+    /// where it changes), the per-ray work runs on 8 rays at a time (see the
+    /// module docs); otherwise rays are tested one by one.
     ///
     /// # Panics
     /// Never; `out` shorter than `rays` only receives the first `out.len()` results.
@@ -461,12 +477,41 @@ impl Bvh {
         t_max: f32,
         out: &mut [Option<BvhHit>],
     ) {
+        self.packet_chunks(rays, t_min, t_max, out, true);
+    }
+
+    /// [`Bvh::intersect_packet`] with the scalar kernels only: the same ranged
+    /// traversal, rays tested one by one in the leaves. This is the reference
+    /// the 8-lane SIMD path is checked against bit for bit (same `t`, same
+    /// leaf slot for every ray); it is also what packets whose rays do not
+    /// share their dominant axis use.
+    ///
+    /// # Complexity
+    /// As [`Bvh::intersect_packet`].
+    pub fn intersect_packet_scalar(
+        &self,
+        rays: &[PreparedRay],
+        t_min: f32,
+        t_max: f32,
+        out: &mut [Option<BvhHit>],
+    ) {
+        self.packet_chunks(rays, t_min, t_max, out, false);
+    }
+
+    fn packet_chunks(
+        &self,
+        rays: &[PreparedRay],
+        t_min: f32,
+        t_max: f32,
+        out: &mut [Option<BvhHit>],
+        simd: bool,
+    ) {
         for (rays, out) in rays.chunks(MAX_PACKET).zip(out.chunks_mut(MAX_PACKET)) {
             let n = rays.len().min(out.len());
             let mut tmax = [t_max; MAX_PACKET];
             let mut slot = [u32::MAX; MAX_PACKET];
             if t_max > t_min {
-                self.packet(&rays[..n], t_min, &mut tmax[..n], &mut slot[..n]);
+                self.packet(&rays[..n], t_min, &mut tmax[..n], &mut slot[..n], simd);
             }
             for i in 0..n {
                 out[i] = (slot[i] != u32::MAX).then(|| self.hit_at(slot[i] as usize, tmax[i]));
@@ -474,15 +519,30 @@ impl Bvh {
         }
     }
 
-    fn packet(&self, rays: &[PreparedRay], t_min: f32, tmax: &mut [f32], slot: &mut [u32]) {
+    /// The flattened nodes (for the SIMD kernels).
+    pub(super) fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    fn packet(
+        &self,
+        rays: &[PreparedRay],
+        t_min: f32,
+        tmax: &mut [f32],
+        slot: &mut [u32],
+        simd: bool,
+    ) {
         let Some(r0) = rays.first() else { return };
         // Specialise the triangle test once when all rays share their dominant
         // axis (nearly always for camera tiles); 3 = per-ray dispatch.
-        match rays.iter().all(|r| r.kz == r0.kz).then_some(r0.kz) {
-            Some(0) => self.packet_kz::<0>(rays, t_min, tmax, slot),
-            Some(1) => self.packet_kz::<1>(rays, t_min, tmax, slot),
-            Some(_) => self.packet_kz::<2>(rays, t_min, tmax, slot),
-            None => self.packet_kz::<3>(rays, t_min, tmax, slot),
+        match (rays.iter().all(|r| r.kz == r0.kz).then_some(r0.kz), simd) {
+            (Some(0), true) => super::packet8::packet::<0>(self, rays, t_min, tmax, slot),
+            (Some(1), true) => super::packet8::packet::<1>(self, rays, t_min, tmax, slot),
+            (Some(_), true) => super::packet8::packet::<2>(self, rays, t_min, tmax, slot),
+            (Some(0), false) => self.packet_kz::<0>(rays, t_min, tmax, slot),
+            (Some(1), false) => self.packet_kz::<1>(rays, t_min, tmax, slot),
+            (Some(_), false) => self.packet_kz::<2>(rays, t_min, tmax, slot),
+            (None, _) => self.packet_kz::<3>(rays, t_min, tmax, slot),
         }
     }
 
@@ -494,17 +554,7 @@ impl Bvh {
         slot: &mut [u32],
     ) {
         let n = rays.len();
-        let o = rays[0].origin;
-        let mut imin = [f32::INFINITY; 3];
-        let mut imax = [f32::NEG_INFINITY; 3];
-        for r in rays {
-            for a in 0..3 {
-                imin[a] = fmin(r.inv[a], imin[a]);
-                imax[a] = fmax(r.inv[a], imax[a]);
-            }
-        }
-        let frustum = rays.iter().all(|r| r.origin == o)
-            && (0..3).all(|a| (imin[a] > 0.0) == (imax[a] > 0.0));
+        let frustum = Frustum::of(rays);
         let packet_max = |tmax: &[f32]| tmax.iter().fold(0.0f32, |m, &t| fmax(m, t));
         let mut pmax = packet_max(tmax);
         let mut stack = [(0u32, 0u32); MAX_DEPTH + 4];
@@ -513,7 +563,7 @@ impl Bvh {
         let mut first = 0usize;
         loop {
             let nd = &self.nodes[node];
-            let mut visit = !frustum || frustum_enters(nd, &o, &imin, &imax, pmax);
+            let mut visit = frustum.is_none_or(|f| f.enters(nd, pmax));
             if visit {
                 while first < n && rays[first].enter(nd, tmax[first]) == f32::INFINITY {
                     first += 1;
@@ -545,16 +595,7 @@ impl Bvh {
                     }
                     pmax = packet_max(tmax);
                 } else {
-                    let left = node + 1;
-                    let right = nd.index as usize;
-                    let r = &rays[first];
-                    let tl = r.enter(&self.nodes[left], f32::INFINITY);
-                    let tr = r.enter(&self.nodes[right], f32::INFINITY);
-                    let (near, far) = if tl <= tr {
-                        (left, right)
-                    } else {
-                        (right, left)
-                    };
+                    let (near, far) = self.ordered_children(node, &rays[first]);
                     stack[sp] = (far as u32, first as u32);
                     sp += 1;
                     node = near;
@@ -567,6 +608,21 @@ impl Bvh {
             sp -= 1;
             node = stack[sp].0 as usize;
             first = stack[sp].1 as usize;
+        }
+    }
+
+    /// The children of inner node `node` as (near, far): ordered by the
+    /// entry distance of `ray` into their boxes (left first on ties).
+    #[inline(always)]
+    pub(super) fn ordered_children(&self, node: usize, ray: &PreparedRay) -> (usize, usize) {
+        let left = node + 1;
+        let right = self.nodes[node].index as usize;
+        let tl = ray.enter(&self.nodes[left], f32::INFINITY);
+        let tr = ray.enter(&self.nodes[right], f32::INFINITY);
+        if tl <= tr {
+            (left, right)
+        } else {
+            (right, left)
         }
     }
 
@@ -643,32 +699,61 @@ impl Bvh {
     }
 }
 
-/// Interval-arithmetic frustum test (Boulos et al. 2006): false only if no
-/// ray with origin `o` and reciprocal directions in `[imin, imax]` (same sign
-/// per axis) enters the node's box before `t_max`.
-#[inline(always)]
-fn frustum_enters(nd: &Node, o: &[f32; 3], imin: &[f32; 3], imax: &[f32; 3], t_max: f32) -> bool {
-    let mut tn = 0.0f32;
-    let mut tf = t_max;
-    for a in 0..3 {
-        let c0 = nd.min[a] - o[a];
-        let c1 = nd.max[a] - o[a];
-        // Smallest and largest of c * inv over inv in [imin, imax].
-        let lo = |c: f32| if c >= 0.0 { c * imin[a] } else { c * imax[a] };
-        let hi = |c: f32| if c >= 0.0 { c * imax[a] } else { c * imin[a] };
-        let (near, far) = if imin[a] > 0.0 {
-            (lo(c0), hi(c1))
-        } else {
-            (lo(c1), hi(c0))
-        };
-        tn = fmax(tn, near);
-        tf = fmin(tf, far * ROBUST_FAR);
+/// The frustum of a packet whose rays share their origin and the signs of
+/// their direction components: the origin and per-axis bounds of the
+/// reciprocal directions.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Frustum {
+    o: [f32; 3],
+    imin: [f32; 3],
+    imax: [f32; 3],
+}
+
+impl Frustum {
+    /// The packet's frustum, or `None` when the rays do not share their
+    /// origin and direction signs (no frustum cull then).
+    pub(super) fn of(rays: &[PreparedRay]) -> Option<Frustum> {
+        let o = rays.first()?.origin;
+        let mut imin = [f32::INFINITY; 3];
+        let mut imax = [f32::NEG_INFINITY; 3];
+        for r in rays {
+            for a in 0..3 {
+                imin[a] = fmin(r.inv[a], imin[a]);
+                imax[a] = fmax(r.inv[a], imax[a]);
+            }
+        }
+        (rays.iter().all(|r| r.origin == o) && (0..3).all(|a| (imin[a] > 0.0) == (imax[a] > 0.0)))
+            .then_some(Frustum { o, imin, imax })
     }
-    tn <= tf
+
+    /// Interval-arithmetic frustum test (Boulos et al. 2006): false only if
+    /// no ray with this origin and reciprocal directions in `[imin, imax]`
+    /// (same sign per axis) enters the node's box before `t_max`.
+    #[inline(always)]
+    pub(super) fn enters(&self, nd: &Node, t_max: f32) -> bool {
+        let (o, imin, imax) = (&self.o, &self.imin, &self.imax);
+        let mut tn = 0.0f32;
+        let mut tf = t_max;
+        for a in 0..3 {
+            let c0 = nd.min[a] - o[a];
+            let c1 = nd.max[a] - o[a];
+            // Smallest and largest of c * inv over inv in [imin, imax].
+            let lo = |c: f32| if c >= 0.0 { c * imin[a] } else { c * imax[a] };
+            let hi = |c: f32| if c >= 0.0 { c * imax[a] } else { c * imin[a] };
+            let (near, far) = if imin[a] > 0.0 {
+                (lo(c0), hi(c1))
+            } else {
+                (lo(c1), hi(c0))
+            };
+            tn = fmax(tn, near);
+            tf = fmin(tf, far * ROBUST_FAR);
+        }
+        tn <= tf
+    }
 }
 
 /// Maximum tree depth; the traversal stack holds one entry per level.
-const MAX_DEPTH: usize = 60;
+pub(super) const MAX_DEPTH: usize = 60;
 
 /// Scene diagonal / this = the largest box extent a triangle reference may keep.
 const SPLIT_DIVISOR: f64 = 32.0;

@@ -376,6 +376,22 @@ impl Camera {
                 for dv in 0..rows {
                     let b = -(((v0 + dv) as f32 + 0.5 - cy) / focal);
                     let base = [f[0] + b * up[0], f[1] + b * up[1], f[2] + b * up[2]];
+                    // A full row of the tile: 8 rays prepared at once.
+                    if u0 + TILE <= w
+                        && super::packet8::prepare_row8(
+                            origin,
+                            base,
+                            r,
+                            std::array::from_fn(|i| ((u0 + i) as f32 + 0.5 - cx) / focal),
+                            &mut rays[n..n + TILE],
+                        )
+                    {
+                        for (i, p) in index[n..n + TILE].iter_mut().enumerate() {
+                            *p = dv * w + u0 + i;
+                        }
+                        n += TILE;
+                        continue;
+                    }
                     for u in u0..(u0 + TILE).min(w) {
                         let a = (u as f32 + 0.5 - cx) / focal;
                         let dir = [base[0] + a * r[0], base[1] + a * r[1], base[2] + a * r[2]];

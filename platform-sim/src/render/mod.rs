@@ -3,6 +3,7 @@
 
 mod bvh;
 mod camera;
+mod packet8;
 
 pub use bvh::{Bvh, BvhHit, BvhTriangle, MAX_LEAF, MAX_PACKET, PreparedRay};
 pub use camera::{Camera, CameraConfig, CameraPose, Frame, NO_INSTANCE, palette};
