@@ -33,6 +33,18 @@
 //!
 //! Coordinates are right-handed, z up, metres, everywhere.
 //!
+//! # Data attribution
+//!
+//! The library embeds `data/hm3d_val_stats.json` ([`procedural::HouseStats::embedded`]):
+//! floors, rooms, navigable area and per-room-type object counts derived
+//! from the HM3D-Semantics v0.2 statistics (K. Yadav et al., "Habitat-Matterport
+//! 3D Semantics Dataset", CVPR 2023; matterport/habitat-matterport-3dresearch),
+//! validation scenes 00800-00899 only. No scan, mesh or raw statistics file is
+//! shipped. HM3D-Semantics is distributed under the *Matterport End User
+//! License Agreement for Academic Use of Model Data*; the derived figures are
+//! provided under those terms (academic, non-commercial research). The crate's
+//! MIT OR Apache-2.0 licence covers its code, not that data.
+//!
 //! # Example
 //!
 //! ```
