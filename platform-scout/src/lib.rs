@@ -67,6 +67,7 @@
 //! # Ok::<(), CloudError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.

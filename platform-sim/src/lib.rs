@@ -15,7 +15,7 @@
 //!
 //! # API themes
 //!
-//! * **Scenes**: [`Scene`] (mesh + BVH + labels), [`SceneDescription`] (its
+//! * **Scenes**: [`Scene`] (labelled mesh), [`SceneDescription`] (its
 //!   serde form), [`ObjectInstance`], [`Level`], [`Room`].
 //! * **Sources**: [`Scene::procedural`], [`Scene::from_home_xml`],
 //!   [`Scene::from_sh3d`], [`Scene::from_gltf`].
@@ -65,7 +65,13 @@
 //! ```
 
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
+
+/// The README's examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 
 pub mod category;
 pub mod error;
@@ -85,7 +91,7 @@ pub use levels::{FloorRelation, NavLevel, floor_relation};
 pub use navmesh::{NavMesh, NavMeshConfig, Span, SpanId};
 pub use procedural::ProceduralConfig;
 pub use scene::{
-    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, RayHit, Room, RoomType, Scene,
+    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, Room, RoomType, Scene,
     SceneDescription,
 };
 pub mod agent;

@@ -15,8 +15,8 @@ use sornav_frontier_graph::{FrontierGraph, FrontierId, LevelId, MultiLevelMap, N
 use sornav_semantic_map::{DepthFrame, LabelId, SemanticMap};
 use sornav_supervisor::{
     Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject, ContextPolicy,
-    LlmPolicy, MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput,
-    Supervisor, SupervisorCommand, normalize_label,
+    MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput, Supervisor,
+    SupervisorCommand, normalize_label,
 };
 use sornav_target_gate::{CandidateReport, GateCommand, NeverVisible, ObjectId, TargetGate};
 use sornav_tsp::HorizonPlan;
@@ -233,7 +233,11 @@ fn build_policy(config: &PolicyConfig) -> Result<BoxedPolicy, AgentError> {
     Ok(match config {
         PolicyConfig::Commonsense(c) => Box::new(CommonsensePolicy::embedded(c.clone())?),
         PolicyConfig::NeverRelocate => Box::new(NeverRelocate),
-        PolicyConfig::Llm(c) => Box::new(LlmPolicy::http(c.clone())?),
+        #[cfg(feature = "llm")]
+        PolicyConfig::Llm(c) => Box::new(sornav_supervisor::LlmPolicy::http(c.clone())?),
+        // Rejected by `AgentConfig::validate` in builds without `llm`.
+        #[cfg(not(feature = "llm"))]
+        PolicyConfig::Llm(_) => return Err(crate::config::llm_disabled().into()),
     })
 }
 

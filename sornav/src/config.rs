@@ -40,7 +40,9 @@ pub enum PolicyConfig {
     Commonsense(CommonsenseConfig),
     /// Never relocate (the paper's first ablation).
     NeverRelocate,
-    /// An OpenAI-compatible LLM endpoint.
+    /// An OpenAI-compatible LLM endpoint. Parses in every build; a build
+    /// without the `llm` cargo feature rejects it in
+    /// [`AgentConfig::validate`] (no HTTP client is compiled in).
     Llm(LlmConfig),
 }
 
@@ -280,6 +282,14 @@ fn household_labels() -> Vec<LabelEntry> {
         .collect()
 }
 
+/// The error for `PolicyConfig::Llm` in a build without the `llm` feature.
+pub(crate) fn llm_disabled() -> ConfigError {
+    component(
+        "policy",
+        "the LLM policy needs sornav's `llm` cargo feature, which this build leaves out",
+    )
+}
+
 fn component(component: &'static str, e: impl std::fmt::Display) -> ConfigError {
     ConfigError::Component {
         component,
@@ -455,7 +465,12 @@ impl AgentConfig {
                 )?;
             }
             PolicyConfig::NeverRelocate => {}
-            PolicyConfig::Llm(c) => c.validate().map_err(|e| component("policy", e))?,
+            PolicyConfig::Llm(c) => {
+                if !cfg!(feature = "llm") {
+                    return Err(llm_disabled());
+                }
+                c.validate().map_err(|e| component("policy", e))?;
+            }
         }
         if let FrontierOrdering::SemanticRanking(s) = &self.ordering {
             let ok = |v: f64| v.is_finite() && v >= 0.0;

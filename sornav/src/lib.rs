@@ -31,6 +31,17 @@
 //!
 //! The agent's maps are built only from its observations.
 //!
+//! # Cargo features
+//! * `llm` (default): [`PolicyConfig::Llm`] builds the supervisor's
+//!   OpenAI-compatible LLM policy (an HTTP client). With
+//!   `default-features = false` no HTTP or TLS crate is compiled and
+//!   [`AgentConfig::validate`] rejects that policy.
+//!
+//! # Data
+//! The default policy embeds the supervisor's commonsense prior, derived
+//! from HM3D-Semantics train scenes and provided under HM3D's terms (see
+//! [`supervisor`]'s "Data attribution").
+//!
 //! # Example
 //! A robot in a 6 m x 4 m room with a doorway, looking for a television
 //! that is in the room:
@@ -94,6 +105,7 @@
 //! # Ok::<(), sornav::AgentError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.

@@ -84,6 +84,7 @@
 //! # Ok::<(), sornav_supervisor::SupervisorError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 mod clock;
@@ -94,7 +95,9 @@ mod evaluation;
 mod hm3d;
 mod label;
 #[cfg(feature = "llm")]
+#[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
 pub mod llm;
+mod llm_config;
 mod policy;
 mod prior;
 mod supervisor;
@@ -109,7 +112,9 @@ pub use evaluation::{TargetAuc, evaluate_prior, roc_auc};
 pub use hm3d::{Hm3dRegion, Hm3dStats, METADATA_FILE, REGIONS_FILE, Split};
 pub use label::{OBJECTNAV_CATEGORIES, STRUCTURAL_LABELS, normalize_label};
 #[cfg(feature = "llm")]
-pub use llm::{LlmConfig, LlmPolicy};
+#[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
+pub use llm::LlmPolicy;
+pub use llm_config::LlmConfig;
 pub use policy::{ContextPolicy, NeverRelocate, PolicyAction, PolicyDecision, Situation};
 pub use prior::{
     ATTRIBUTION, CooccurrencePrior, MP3D_EXTRA_TARGETS, Posterior, PriorBuildConfig, TargetRow,
