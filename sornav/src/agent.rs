@@ -29,8 +29,8 @@ use crate::observation::{Observation, ObservationReport, Sensor};
 use crate::ordering::{self, OrderingInput, Route};
 use crate::path_cost::MapPathCost;
 use crate::snapshot::{
-    AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,
-    RelocationRecord,
+    AgentSnapshot, AgentStats, Decision, DecisionAction, DecisionStep, ObjectRecord,
+    OccupancyRaster, RelocationRecord,
 };
 use crate::target::{Target, Vocabulary};
 
@@ -881,14 +881,14 @@ impl Agent {
         &mut self,
         at: Duration,
         step: DecisionStep,
-        action: &str,
+        action: DecisionAction,
         mission: Option<MissionId>,
         reason: impl Into<String>,
     ) {
         let decision = Decision {
             at,
             step,
-            action: action.to_owned(),
+            action,
             mission,
             reason: reason.into(),
         };
@@ -905,7 +905,7 @@ impl Agent {
         reason: impl Into<String>,
     ) -> AgentCommand {
         let mission = self.executor.active().map(|(id, _)| id);
-        self.decide(now, step, "continue", mission, reason);
+        self.decide(now, step, DecisionAction::Continue, mission, reason);
         AgentCommand::Continue { mission }
     }
 
@@ -917,7 +917,7 @@ impl Agent {
         now: Duration,
         mission: Mission,
         path: Vec<Point3<f64>>,
-        action: &str,
+        action: DecisionAction,
         reason: String,
     ) -> Result<AgentCommand, AgentError> {
         let step = match mission.kind {
@@ -934,7 +934,7 @@ impl Agent {
         step: DecisionStep,
         mut mission: Mission,
         path: Vec<Point3<f64>>,
-        action: &str,
+        action: DecisionAction,
         reason: String,
     ) -> Result<AgentCommand, AgentError> {
         if !path.is_empty() {
@@ -1066,7 +1066,7 @@ impl Agent {
                 self.decide(
                     now,
                     DecisionStep::TargetConfirmed,
-                    "stop",
+                    DecisionAction::Stop,
                     None,
                     format!(
                         "object {} confirmed: N_obs observations and a fresh detection after arrival",
@@ -1079,7 +1079,7 @@ impl Agent {
                 self.decide(
                     now,
                     DecisionStep::TargetVerification,
-                    "verify",
+                    DecisionAction::Verify,
                     None,
                     format!("arrived at candidate {}: face it and observe", object.0),
                 );
@@ -1319,7 +1319,7 @@ impl Agent {
                             },
                             waypoint,
                         );
-                        let cmd = self.dispatch(now, mission, path, "relocate", reason.clone())?;
+                        let cmd = self.dispatch(now, mission, path, DecisionAction::Relocate, reason.clone())?;
                         if let AgentCommand::Dispatch { id, .. } = &cmd {
                             self.stats.relocations += 1;
                             self.relocation = Some(RelocationRecord {
@@ -1355,7 +1355,7 @@ impl Agent {
                 };
                 match explore {
                     Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => {
-                        self.dispatch_as(now, step, mission, Vec::new(), "explore", reason)?
+                        self.dispatch_as(now, step, mission, Vec::new(), DecisionAction::Explore, reason)?
                     }
                     Some(_) => self.keep_going(now, step, reason),
                     None if active.is_none() && self.current_level().is_none() => {
@@ -1401,7 +1401,7 @@ impl Agent {
                         self.decide(
                             now,
                             step,
-                            "exhausted",
+                            DecisionAction::Exhausted,
                             None,
                             format!("no reachable frontier ({reason})"),
                         );
@@ -1472,7 +1472,7 @@ impl Agent {
                 self.decide(
                     now,
                     step,
-                    "exhausted",
+                    DecisionAction::Exhausted,
                     None,
                     format!("nothing reachable off a known floor, no way back ({reason})"),
                 );
@@ -1527,7 +1527,7 @@ impl Agent {
                     now,
                     mission,
                     path,
-                    "nav_to_object",
+                    DecisionAction::NavToObject,
                     format!("candidate {target_id} has N_obs supporting observations"),
                 )
             }
@@ -1648,7 +1648,7 @@ impl Agent {
                     DecisionStep::TargetAccepted,
                     mission,
                     Vec::new(),
-                    "explore",
+                    DecisionAction::Explore,
                     format!("candidate {target_id} is on another floor: taking the stairs to it"),
                 )
             }

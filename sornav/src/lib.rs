@@ -123,6 +123,7 @@ mod ordering;
 mod path_cost;
 mod snapshot;
 mod target;
+pub mod toml_file;
 
 pub use agent::{Agent, AgentCommand, BoxedPolicy};
 pub use commitment::CommitmentConfig;
@@ -135,12 +136,13 @@ pub use observation::{
     CloudObservation, DepthObservation, Observation, ObservationReport, OccupancyObservation,
     Sensor, occupancy_stride,
 };
-pub use ordering::Route;
+pub use ordering::{OrderingKind, Route};
 pub use snapshot::{
-    AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,
-    RelocationRecord,
+    AgentSnapshot, AgentStats, Decision, DecisionAction, DecisionStep, ObjectRecord,
+    OccupancyRaster, RelocationRecord, UnknownDecisionAction,
 };
 pub use target::{Target, Vocabulary};
+pub use toml_file::TomlError;
 
 /// The components, re-exported so that platforms and examples need only
 /// this crate.

@@ -13,11 +13,59 @@ use sornav_tsp::{CostMatrix, HorizonFrontier, HorizonPlan, HorizonProblem, Reced
 use crate::config::{FrontierOrdering, SemanticRankingConfig};
 use crate::error::AgentError;
 
+/// Which ordering produced a [`Route`] (the kind of
+/// [`FrontierOrdering`], without its parameters). Serialises as the
+/// snake-case name and compares equal to it (`kind == "tsp"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OrderingKind {
+    /// [`FrontierOrdering::Tsp`].
+    Tsp,
+    /// [`FrontierOrdering::Nearest`].
+    Nearest,
+    /// [`FrontierOrdering::SemanticRanking`].
+    SemanticRanking,
+}
+
+impl OrderingKind {
+    /// The snake-case name, as serialised.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            OrderingKind::Tsp => "tsp",
+            OrderingKind::Nearest => "nearest",
+            OrderingKind::SemanticRanking => "semantic_ranking",
+        }
+    }
+}
+
+impl std::fmt::Display for OrderingKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+impl PartialEq<&str> for OrderingKind {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
+impl FrontierOrdering {
+    /// The kind of this ordering.
+    pub fn kind(&self) -> OrderingKind {
+        match self {
+            FrontierOrdering::Tsp => OrderingKind::Tsp,
+            FrontierOrdering::Nearest => OrderingKind::Nearest,
+            FrontierOrdering::SemanticRanking(_) => OrderingKind::SemanticRanking,
+        }
+    }
+}
+
 /// The exploration route of one step.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Route {
-    /// Which ordering produced it (`tsp`, `nearest`, `semantic_ranking`).
-    pub ordering: String,
+    /// Which ordering produced it.
+    pub ordering: OrderingKind,
     /// Frontiers in visiting order (TSP), or by decreasing preference.
     pub order: Vec<FrontierId>,
     /// The frontier to explore now: the ordering's first, or the frontier
@@ -147,7 +195,7 @@ fn tsp(
     let route = plan.as_ref().and_then(|p| {
         let first = cands.iter().find(|c| c.id == p.first)?;
         Some(Route {
-            ordering: "tsp".into(),
+            ordering: OrderingKind::Tsp,
             order: p.order.clone(),
             first: p.first,
             first_viewpoint: first.viewpoint,
@@ -161,7 +209,7 @@ fn tsp(
 }
 
 /// Candidates by decreasing `scores` (aligned with `cands`), ties by id.
-fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
+fn ranked(kind: OrderingKind, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
     let mut idx: Vec<usize> = (0..cands.len()).collect();
     idx.sort_by(|&a, &b| {
         scores[b]
@@ -170,7 +218,7 @@ fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
     });
     let best = &cands[*idx.first()?];
     Some(Route {
-        ordering: name.into(),
+        ordering: kind,
         order: idx.iter().map(|&i| cands[i].id).collect(),
         first: best.id,
         first_viewpoint: best.viewpoint,
@@ -182,7 +230,7 @@ fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
 
 fn nearest(cands: &[Reachable]) -> Option<Route> {
     let scores: Vec<f64> = cands.iter().map(|c| -c.cost).collect();
-    ranked("nearest", cands, &scores)
+    ranked(OrderingKind::Nearest, cands, &scores)
 }
 
 /// `P(g | labels of the objects with support >= N_min within R_s of the
@@ -211,7 +259,7 @@ fn semantic(
                 - weights.distance_weight * c.cost
         })
         .collect();
-    ranked("semantic_ranking", cands, &scores)
+    ranked(OrderingKind::SemanticRanking, cands, &scores)
 }
 
 #[cfg(test)]

@@ -35,6 +35,87 @@ pub enum DecisionStep {
     RegionDwell,
 }
 
+/// What a [`Decision`] did. Serialises as the snake-case name
+/// (`"nav_to_object"`), compares equal to that name (`action == "relocate"`)
+/// and parses from it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DecisionAction {
+    /// The target is confirmed: STOP.
+    Stop,
+    /// Face the candidate and observe it again.
+    Verify,
+    /// Approach a target candidate (`NAV_TO_OBJECT`).
+    NavToObject,
+    /// Relocate to another cluster.
+    Relocate,
+    /// Explore a frontier.
+    Explore,
+    /// Keep the active mission.
+    Continue,
+    /// Nothing reachable is left to explore.
+    Exhausted,
+}
+
+impl DecisionAction {
+    /// Every action, in declaration order.
+    pub const ALL: [DecisionAction; 7] = [
+        DecisionAction::Stop,
+        DecisionAction::Verify,
+        DecisionAction::NavToObject,
+        DecisionAction::Relocate,
+        DecisionAction::Explore,
+        DecisionAction::Continue,
+        DecisionAction::Exhausted,
+    ];
+
+    /// The snake-case name, as serialised.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            DecisionAction::Stop => "stop",
+            DecisionAction::Verify => "verify",
+            DecisionAction::NavToObject => "nav_to_object",
+            DecisionAction::Relocate => "relocate",
+            DecisionAction::Explore => "explore",
+            DecisionAction::Continue => "continue",
+            DecisionAction::Exhausted => "exhausted",
+        }
+    }
+}
+
+impl std::fmt::Display for DecisionAction {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
+/// A name that is no [`DecisionAction`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown decision action {0:?}")]
+pub struct UnknownDecisionAction(pub String);
+
+impl std::str::FromStr for DecisionAction {
+    type Err = UnknownDecisionAction;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        DecisionAction::ALL
+            .into_iter()
+            .find(|a| a.as_str() == s)
+            .ok_or_else(|| UnknownDecisionAction(s.to_owned()))
+    }
+}
+
+impl PartialEq<str> for DecisionAction {
+    fn eq(&self, other: &str) -> bool {
+        self.as_str() == other
+    }
+}
+
+impl PartialEq<&str> for DecisionAction {
+    fn eq(&self, other: &&str) -> bool {
+        self.as_str() == *other
+    }
+}
+
 /// One decision of [`Agent::step`](crate::Agent::step).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Decision {
@@ -42,9 +123,8 @@ pub struct Decision {
     pub at: Duration,
     /// The rule that decided.
     pub step: DecisionStep,
-    /// What was done (`stop`, `verify`, `nav_to_object`, `relocate`,
-    /// `explore`, `continue`, `exhausted`).
-    pub action: String,
+    /// What was done.
+    pub action: DecisionAction,
     /// The mission dispatched or kept, if any.
     pub mission: Option<MissionId>,
     /// Why (the policy's reason for policy decisions).
@@ -195,4 +275,20 @@ pub struct AgentSnapshot {
     pub last_decision: Option<Decision>,
     /// Counters.
     pub stats: AgentStats,
+}
+
+#[cfg(test)]
+mod decision_action_tests {
+    use super::DecisionAction;
+
+    #[test]
+    fn names_round_trip_through_serde_and_from_str() {
+        for a in DecisionAction::ALL {
+            let json = serde_json::to_string(&a).unwrap();
+            assert_eq!(json, format!("\"{}\"", a.as_str()));
+            assert_eq!(a.as_str().parse::<DecisionAction>().unwrap(), a);
+            assert!(a == a.as_str());
+        }
+        assert!("jump".parse::<DecisionAction>().is_err());
+    }
 }
