@@ -120,3 +120,7 @@ pub use grid::{CellState, OccupancyGrid};
 pub use levels::{Level, Location, MultiLevelMap, STAIR_FRONTIER_BASE};
 pub use map::{FrontierMap, RefreshStats, UpdateStats, path_cells};
 pub use stairs::{Stair, StairEnd};
+
+/// petgraph, re-exported deliberately: [`FrontierGraph::to_petgraph`]
+/// returns its types, so callers use this (0.x) version through this path.
+pub use petgraph;
