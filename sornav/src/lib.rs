@@ -113,6 +113,40 @@
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
+/// Implements `as_str`, `Display`, `PartialEq<str>` and `PartialEq<&str>`
+/// for a fieldless enum from `Variant => "name"` pairs (its serde names),
+/// so that the enum reads and compares like the string it replaces.
+macro_rules! snake_case_names {
+    ($ty:ident { $($variant:ident => $name:literal),+ $(,)? }) => {
+        impl $ty {
+            /// The snake-case name, as serialised.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $($ty::$variant => $name,)+
+                }
+            }
+        }
+
+        impl std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl PartialEq<str> for $ty {
+            fn eq(&self, other: &str) -> bool {
+                self.as_str() == other
+            }
+        }
+
+        impl PartialEq<&str> for $ty {
+            fn eq(&self, other: &&str) -> bool {
+                self.as_str() == *other
+            }
+        }
+    };
+}
+
 mod agent;
 mod approach;
 mod commitment;

@@ -27,28 +27,11 @@ pub enum OrderingKind {
     SemanticRanking,
 }
 
-impl OrderingKind {
-    /// The snake-case name, as serialised.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            OrderingKind::Tsp => "tsp",
-            OrderingKind::Nearest => "nearest",
-            OrderingKind::SemanticRanking => "semantic_ranking",
-        }
-    }
-}
-
-impl std::fmt::Display for OrderingKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
-
-impl PartialEq<&str> for OrderingKind {
-    fn eq(&self, other: &&str) -> bool {
-        self.as_str() == *other
-    }
-}
+snake_case_names!(OrderingKind {
+    Tsp => "tsp",
+    Nearest => "nearest",
+    SemanticRanking => "semantic_ranking",
+});
 
 impl FrontierOrdering {
     /// The kind of this ordering.

@@ -68,26 +68,17 @@ impl DecisionAction {
         DecisionAction::Continue,
         DecisionAction::Exhausted,
     ];
-
-    /// The snake-case name, as serialised.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            DecisionAction::Stop => "stop",
-            DecisionAction::Verify => "verify",
-            DecisionAction::NavToObject => "nav_to_object",
-            DecisionAction::Relocate => "relocate",
-            DecisionAction::Explore => "explore",
-            DecisionAction::Continue => "continue",
-            DecisionAction::Exhausted => "exhausted",
-        }
-    }
 }
 
-impl std::fmt::Display for DecisionAction {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.as_str())
-    }
-}
+snake_case_names!(DecisionAction {
+    Stop => "stop",
+    Verify => "verify",
+    NavToObject => "nav_to_object",
+    Relocate => "relocate",
+    Explore => "explore",
+    Continue => "continue",
+    Exhausted => "exhausted",
+});
 
 /// A name that is no [`DecisionAction`].
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
@@ -101,18 +92,6 @@ impl std::str::FromStr for DecisionAction {
             .into_iter()
             .find(|a| a.as_str() == s)
             .ok_or_else(|| UnknownDecisionAction(s.to_owned()))
-    }
-}
-
-impl PartialEq<str> for DecisionAction {
-    fn eq(&self, other: &str) -> bool {
-        self.as_str() == other
-    }
-}
-
-impl PartialEq<&str> for DecisionAction {
-    fn eq(&self, other: &&str) -> bool {
-        self.as_str() == *other
     }
 }
 
