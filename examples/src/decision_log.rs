@@ -263,7 +263,7 @@ mod tests {
         let d = |s: u64, reason: &str| Decision {
             at: std::time::Duration::from_millis(s * 500),
             step: DecisionStep::RateLimited,
-            action: "continue".into(),
+            action: DecisionAction::Continue,
             mission: Some(sornav::executor::MissionId(1)),
             reason: reason.into(),
         };

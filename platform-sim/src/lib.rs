@@ -91,8 +91,7 @@ pub use levels::{FloorRelation, NavLevel, floor_relation};
 pub use navmesh::{NavMesh, NavMeshConfig, Span, SpanId};
 pub use procedural::ProceduralConfig;
 pub use scene::{
-    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, Room, RoomType, Scene,
-    SceneDescription,
+    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, Room, RoomType, Scene, SceneDescription,
 };
 pub mod agent;
 pub mod episodes;

@@ -339,7 +339,7 @@ pub fn run_episode(
     let clock = Instant::now();
     let spent = |clock: &Instant| clock.elapsed().as_secs_f64() > config.wall_clock_s;
     // How the loop ended: STOP, step limit or timeout.
-    let end = loop {
+    let loop_end = loop {
         // (before the first observation nothing has been counted yet)
         if actions > 0 && spent(&clock) {
             break LoopEnd::Timeout;
@@ -380,7 +380,7 @@ pub fn run_episode(
             break LoopEnd::StepLimit;
         }
     };
-    let stopped = end == LoopEnd::Stopped;
+    let stopped = loop_end == LoopEnd::Stopped;
     let timed_s = clock.elapsed().as_secs_f64();
     let end = agent.position();
     let dtg = field.distance(nav, &end).ok().filter(|d| d.is_finite());
@@ -416,7 +416,7 @@ pub fn run_episode(
         goal_level: floors.goal_level,
         floors_between: floors.floors_between,
         cross_floor: floors.cross_floor(),
-        outcome: metrics::classify(match end {
+        outcome: metrics::classify(match loop_end {
             LoopEnd::Stopped => Termination::Stopped {
                 success,
                 near_object,

@@ -631,7 +631,7 @@ fn wall_mesh(
         };
         let height_at = |d: f64| h0 + (h1 - h0) * ((acc + d) / total).clamp(0.0, 1.0);
         let mut cuts = Vec::new();
-        for (ol, p, fp) in &openings {
+        for (ol, p, fp) in openings {
             if *ol != l {
                 continue;
             }
@@ -775,7 +775,13 @@ fn build_home(
         if !built(l) {
             continue;
         }
-        wall_mesh(&mut b, w, (l, &levels[l].level), home.wall_height, &openings)?;
+        wall_mesh(
+            &mut b,
+            w,
+            (l, &levels[l].level),
+            home.wall_height,
+            &openings,
+        )?;
     }
 
     // furniture, doors, windows

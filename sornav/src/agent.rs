@@ -1319,7 +1319,13 @@ impl Agent {
                             },
                             waypoint,
                         );
-                        let cmd = self.dispatch(now, mission, path, DecisionAction::Relocate, reason.clone())?;
+                        let cmd = self.dispatch(
+                            now,
+                            mission,
+                            path,
+                            DecisionAction::Relocate,
+                            reason.clone(),
+                        )?;
                         if let AgentCommand::Dispatch { id, .. } = &cmd {
                             self.stats.relocations += 1;
                             self.relocation = Some(RelocationRecord {
@@ -1354,9 +1360,15 @@ impl Agent {
                     _ => unreachable!("matched above"),
                 };
                 match explore {
-                    Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => {
-                        self.dispatch_as(now, step, mission, Vec::new(), DecisionAction::Explore, reason)?
-                    }
+                    Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => self
+                        .dispatch_as(
+                            now,
+                            step,
+                            mission,
+                            Vec::new(),
+                            DecisionAction::Explore,
+                            reason,
+                        )?,
                     Some(_) => self.keep_going(now, step, reason),
                     None if active.is_none() && self.current_level().is_none() => {
                         // Between floors (on a stair, or on a floor not
@@ -1441,7 +1453,7 @@ impl Agent {
             },
             back,
         );
-        self.dispatch_as(now, step, mission, path, "retreat", reason)
+        self.dispatch_as(now, step, mission, path, DecisionAction::Retreat, reason)
     }
 
     /// Off a known floor, nothing reachable, looked around: walks back
@@ -1546,7 +1558,7 @@ impl Agent {
         self.decide(
             now,
             DecisionStep::TargetAccepted,
-            "reject_candidate",
+            DecisionAction::RejectCandidate,
             None,
             format!("candidate {target_id}: {why}"),
         );

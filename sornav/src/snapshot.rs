@@ -55,11 +55,16 @@ pub enum DecisionAction {
     Continue,
     /// Nothing reachable is left to explore.
     Exhausted,
+    /// Walk back along the robot's own trail to the last floor it stood on
+    /// (a relocation outside any cluster).
+    Retreat,
+    /// A target candidate could not be approached and was set aside.
+    RejectCandidate,
 }
 
 impl DecisionAction {
     /// Every action, in declaration order.
-    pub const ALL: [DecisionAction; 7] = [
+    pub const ALL: [DecisionAction; 9] = [
         DecisionAction::Stop,
         DecisionAction::Verify,
         DecisionAction::NavToObject,
@@ -67,6 +72,8 @@ impl DecisionAction {
         DecisionAction::Explore,
         DecisionAction::Continue,
         DecisionAction::Exhausted,
+        DecisionAction::Retreat,
+        DecisionAction::RejectCandidate,
     ];
 }
 
@@ -78,6 +85,8 @@ snake_case_names!(DecisionAction {
     Explore => "explore",
     Continue => "continue",
     Exhausted => "exhausted",
+    Retreat => "retreat",
+    RejectCandidate => "reject_candidate",
 });
 
 /// A name that is no [`DecisionAction`].

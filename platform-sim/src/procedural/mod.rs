@@ -77,8 +77,8 @@ pub mod furniture;
 pub mod stats;
 
 use nalgebra::{Point2, Point3};
-use rand::{Rng, SeedableRng};
 use petgraph::unionfind::UnionFind;
+use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
@@ -1120,9 +1120,8 @@ fn floor_openings(
     shuffle(rng, &mut order);
     for &k in &order {
         let o = cands[k];
-        if sets.union(o.rooms.0, o.rooms.1) {
-            chosen.push(o);
-        } else if rng.random::<f64>() < EXTRA_DOOR_PROBABILITY {
+        // a tree edge, or (drawn only then) an extra door
+        if sets.union(o.rooms.0, o.rooms.1) || rng.random::<f64>() < EXTRA_DOOR_PROBABILITY {
             chosen.push(o);
         }
     }
@@ -1299,15 +1298,8 @@ pub fn generate_with_stats(
     let mut rooms_out = Vec::new();
     for (f, rooms) in plan.iter().enumerate() {
         let top = f + 1 == floors;
-        let (level, floor_rooms_out) = floor_geometry(
-            &mut b,
-            f,
-            rooms,
-            &openings[f],
-            (top, ends[f]),
-            &g,
-            config,
-        );
+        let (level, floor_rooms_out) =
+            floor_geometry(&mut b, f, rooms, &openings[f], (top, ends[f]), &g, config);
         levels.push(level);
         rooms_out.extend(floor_rooms_out);
     }
@@ -1393,7 +1385,7 @@ fn furnish_room(
         z,
     } = *placed;
     let mut room = RoomFurniture::default();
-    for o in &openings {
+    for o in openings {
         if o.rooms.0 != ri && o.rooms.1 != ri {
             continue;
         }
@@ -1469,8 +1461,7 @@ fn furnish_room(
         let mounted = sh.placement == Placement::Mounted;
         // the floor-space budget limits extra instances only, so that
         // presence follows the statistics even in small rooms
-        if !mounted && k > 0 && used_area + size.0 * size.1 > MAX_FURNISHED_SHARE * rect.area()
-        {
+        if !mounted && k > 0 && used_area + size.0 * size.1 > MAX_FURNISHED_SHARE * rect.area() {
             continue;
         }
         // `room.placed` does not change while this piece is placed

@@ -46,7 +46,6 @@ use std::collections::HashMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{self, Receiver, TryRecvError};
-use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 use tracing::{info, warn};
