@@ -13,7 +13,7 @@ use crate::{ClusterError, ClusterGraph, ClusterId};
 ///
 /// Implement it for your map's object type (or wrap it in a newtype); it is
 /// implemented for [`ObjectSummary`] and for references to any implementor.
-pub trait ContextObject {
+pub trait LabelledObject {
     /// Category label `l_j`.
     fn label(&self) -> &str;
     /// Support `N_j`: the number of voxels (observations) backing the object.
@@ -30,7 +30,7 @@ pub trait ContextObject {
     }
 }
 
-impl<T: ContextObject + ?Sized> ContextObject for &T {
+impl<T: LabelledObject + ?Sized> LabelledObject for &T {
     fn label(&self) -> &str {
         (**self).label()
     }
@@ -45,7 +45,7 @@ impl<T: ContextObject + ?Sized> ContextObject for &T {
     }
 }
 
-/// A plain object record implementing [`ContextObject`].
+/// A plain object record implementing [`LabelledObject`].
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ObjectSummary {
     /// Category label `l_j`.
@@ -59,7 +59,7 @@ pub struct ObjectSummary {
     pub level: Option<u16>,
 }
 
-impl ContextObject for ObjectSummary {
+impl LabelledObject for ObjectSummary {
     fn label(&self) -> &str {
         &self.label
     }
@@ -119,7 +119,7 @@ pub struct RobotContext {
     pub rejected_non_finite: usize,
 }
 
-fn finite_xy<O: ContextObject>(o: &O) -> Option<Point2<f64>> {
+fn finite_xy<O: LabelledObject>(o: &O) -> Option<Point2<f64>> {
     let c = o.centre();
     c.iter().all(|v| v.is_finite()).then(|| c.xy())
 }
@@ -127,7 +127,7 @@ fn finite_xy<O: ContextObject>(o: &O) -> Option<Point2<f64>> {
 /// Splits `objects` into the qualifying `(index, distance)` pairs and the
 /// number of non-finite rejections; `distance` returns the horizontal
 /// distance of an object's xy centre to the context's anchor.
-fn qualifying<O: ContextObject>(
+fn qualifying<O: LabelledObject>(
     objects: &[O],
     n_min: usize,
     radius: f64,
@@ -183,7 +183,7 @@ fn qualifying<O: ContextObject>(
 /// assert_eq!(s_r.objects.len(), 1);
 /// assert_eq!(s_r.objects[0].label, "bed");
 /// ```
-pub fn robot_context<O: ContextObject>(
+pub fn robot_context<O: LabelledObject>(
     robot: Point2<f64>,
     objects: &[O],
     config: &crate::ClusterConfig,
@@ -196,7 +196,7 @@ pub fn robot_context<O: ContextObject>(
 ///
 /// # Complexity
 /// O(M log M) for M objects.
-pub fn robot_context_on_level<O: ContextObject>(
+pub fn robot_context_on_level<O: LabelledObject>(
     robot: Point2<f64>,
     level: Option<u16>,
     objects: &[O],
@@ -229,7 +229,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
     ///
     /// # Complexity
     /// O(M n_k + M log M) for M objects and n_k members.
-    pub fn cluster_context<O: ContextObject>(
+    pub fn cluster_context<O: LabelledObject>(
         &self,
         k: ClusterId,
         objects: &[O],
@@ -269,7 +269,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
     ///
     /// # Complexity
     /// O(M n + K M log M) for M objects and n frontiers.
-    pub fn candidate_contexts<O: ContextObject>(&self, objects: &[O]) -> Vec<ClusterContext> {
+    pub fn candidate_contexts<O: LabelledObject>(&self, objects: &[O]) -> Vec<ClusterContext> {
         self.top_k()
             .iter()
             .filter_map(|&k| self.cluster_context(k, objects).ok())
@@ -279,7 +279,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
     /// The robot's context `S_r` at the robot position the graph was built
     /// with, counting objects of the robot's level only; see
     /// [`robot_context`].
-    pub fn robot_context<O: ContextObject>(&self, objects: &[O]) -> RobotContext {
+    pub fn robot_context<O: LabelledObject>(&self, objects: &[O]) -> RobotContext {
         robot_context_on_level(
             self.robot_position(),
             Some(self.robot_level()),

@@ -27,7 +27,7 @@
 //!   [`ClusterGraph::top_k`] are the candidates. Cluster indices are
 //!   per-build; [`ClusterGraph::matching_cluster`] follows a cluster across
 //!   rebuilds through its (stable) frontier ids.
-//! * Contexts: objects enter through the small [`ContextObject`] trait
+//! * Contexts: objects enter through the small [`LabelledObject`] trait
 //!   (label, support, centre); [`ClusterGraph::cluster_context`] gives `S_k`,
 //!   [`robot_context`] gives `S_r`. Both are serialisable.
 //! * Parameters: [`ClusterConfig`] (`rho_c` 25, `eta` 0.1, `K` 10, `N_min` 10,
@@ -73,6 +73,7 @@
 //! # Ok::<(), sornav_cluster_graph::ClusterError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.
@@ -92,7 +93,7 @@ mod ranking;
 pub use cluster_graph::{Cluster, ClusterEdge, ClusterGraph, ClusterId, Relocation};
 pub use config::{ClusterConfig, MAX_ETA};
 pub use context::{
-    CandidateObject, ClusterContext, ContextObject, NearbyObject, ObjectSummary, RobotContext,
+    CandidateObject, ClusterContext, LabelledObject, NearbyObject, ObjectSummary, RobotContext,
     robot_context, robot_context_on_level,
 };
 pub use decision_graph::{

@@ -3,7 +3,7 @@
 //! a few kilobytes.
 
 use serde::{Deserialize, Serialize};
-use sornav::{Decision, DecisionStep};
+use sornav::{Decision, DecisionAction, DecisionStep};
 
 /// A run of identical consecutive decisions (same rule, action, mission and
 /// reason).
@@ -18,7 +18,7 @@ pub struct LoggedDecision {
     /// The Algorithm 1 rule that decided.
     pub step: DecisionStep,
     /// What was done.
-    pub action: String,
+    pub action: DecisionAction,
     /// The mission dispatched or kept.
     pub mission: Option<u64>,
     /// Why.
@@ -171,7 +171,7 @@ mod tests {
             until: t,
             count: 1,
             step,
-            action: action.into(),
+            action: action.parse().unwrap(),
             mission,
             reason: String::new(),
         }
@@ -263,7 +263,7 @@ mod tests {
         let d = |s: u64, reason: &str| Decision {
             at: std::time::Duration::from_millis(s * 500),
             step: DecisionStep::RateLimited,
-            action: "continue".into(),
+            action: DecisionAction::Continue,
             mission: Some(sornav::executor::MissionId(1)),
             reason: reason.into(),
         };

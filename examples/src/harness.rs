@@ -679,43 +679,18 @@ fn safe(s: &str) -> String {
         .collect()
 }
 
-/// Runs (or resumes) an evaluation and writes its outputs.
-///
-/// The output directory is locked for the run ([`output::lock_dir`]);
-/// `run.json` and the report are replaced atomically. The first failure to
-/// write a record stops the run: no further episode is started, and the
-/// error is returned. When [`RunOptions::stop`] is set, episodes not yet
-/// started are left for a later run (resume), the running ones finish and
-/// are recorded, and the report covers what finished.
+/// Loads every scene of `config` (in parallel on `pool`) with its episodes
+/// (from the episode file or generated), and checks them: episode ids unique
+/// per scene, at least one episode, a warning for a target category without
+/// any.
 ///
 /// # Errors
-/// [`HarnessError`] for invalid settings or options, a locked output
-/// directory, unloadable scenes, duplicate episode ids in a scene, settings
-/// that leave no episode ([`HarnessError::NoEpisodes`]), a different
-/// evaluation already in `out`, every started episode failing to start
-/// ([`HarnessError::AllFailed`]), and I/O failures. A single episode that
-/// fails to start (no navigable start) is logged, counted in
-/// [`RunOutcome::failed`] and skipped.
-pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, HarnessError> {
-    config.validate()?;
-    options.validate()?;
-    let t0 = Instant::now();
-    std::fs::create_dir_all(&options.out).map_err(|e| io_err(&options.out, e))?;
-    // One writer per output directory, held until the report is written.
-    let _lock = output::lock_dir(&options.out)?;
-    check_run_file(&options.out, config, options.fresh)?;
-    let jsonl = options.out.join("episodes.jsonl");
-    let done: HashSet<(String, String, String)> = read_records(&jsonl)?
-        .iter()
-        .map(EpisodeRecord::key)
-        .collect();
-
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.jobs.max(1))
-        .build()
-        .map_err(|e| HarnessError::Config(format!("thread pool: {e}")))?;
-
-    // Scenes and episodes.
+/// Those of loading a scene or its episodes,
+/// [`HarnessError::DuplicateEpisode`] and [`HarnessError::NoEpisodes`].
+fn load_scenes(
+    config: &EvalConfig,
+    pool: &rayon::ThreadPool,
+) -> Result<Vec<LoadedScene>, HarnessError> {
     let from_file: Vec<Episode> = match &config.episodes {
         EpisodeSource::File { path } => HabitatDataset::read(path)
             .and_then(|d| d.to_episodes())
@@ -761,8 +736,17 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             tracing::warn!("target category '{c}' has no episode in any scene (misspelt?)");
         }
     }
+    Ok(scenes)
+}
 
-    // Work items, in a fixed order; then the shard; then resume.
+/// The work items (scene, episode, variant) in a fixed order, kept to
+/// `options.shard`, and the (scene, episode) pairs whose maps are saved:
+/// the first `config.maps` episodes.
+fn work_items(
+    config: &EvalConfig,
+    options: &RunOptions,
+    scenes: &[LoadedScene],
+) -> (Vec<WorkItem>, HashSet<(usize, usize)>) {
     let mut items = Vec::new();
     for (s, scene) in scenes.iter().enumerate() {
         for e in 0..scene.episodes.len() {
@@ -791,6 +775,50 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             .map(|(_, w)| w)
             .collect();
     }
+    (items, map_episodes)
+}
+
+/// Runs (or resumes) an evaluation and writes its outputs.
+///
+/// The output directory is locked for the run ([`output::lock_dir`]);
+/// `run.json` and the report are replaced atomically. The first failure to
+/// write a record stops the run: no further episode is started, and the
+/// error is returned. When [`RunOptions::stop`] is set, episodes not yet
+/// started are left for a later run (resume), the running ones finish and
+/// are recorded, and the report covers what finished.
+///
+/// # Errors
+/// [`HarnessError`] for invalid settings or options, a locked output
+/// directory, unloadable scenes, duplicate episode ids in a scene, settings
+/// that leave no episode ([`HarnessError::NoEpisodes`]), a different
+/// evaluation already in `out`, every started episode failing to start
+/// ([`HarnessError::AllFailed`]), and I/O failures. A single episode that
+/// fails to start (no navigable start) is logged, counted in
+/// [`RunOutcome::failed`] and skipped.
+pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, HarnessError> {
+    config.validate()?;
+    options.validate()?;
+    let t0 = Instant::now();
+    std::fs::create_dir_all(&options.out).map_err(|e| io_err(&options.out, e))?;
+    // One writer per output directory, held until the report is written.
+    let _lock = output::lock_dir(&options.out)?;
+    check_run_file(&options.out, config, options.fresh)?;
+    let jsonl = options.out.join("episodes.jsonl");
+    let done: HashSet<(String, String, String)> = read_records(&jsonl)?
+        .iter()
+        .map(EpisodeRecord::key)
+        .collect();
+
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.jobs.max(1))
+        .build()
+        .map_err(|e| HarnessError::Config(format!("thread pool: {e}")))?;
+
+    // Scenes and episodes.
+    let scenes = load_scenes(config, &pool)?;
+
+    // Work items, in a fixed order; then the shard; then resume.
+    let (mut items, map_episodes) = work_items(config, options, &scenes);
     let total = items.len();
     let key = |w: &WorkItem| {
         (

@@ -18,6 +18,7 @@
 //! These modules hold no navigation algorithm: the algorithms live in the
 //! `sornav-*` crates and the simulator in `sornav-platform-sim`.
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 pub mod adapter;

@@ -6,6 +6,15 @@
 //! [`MissionKind::NavToObject`] to approach a target candidate. Each mission
 //! has a waypoint (a nalgebra point) and, when known, an executable path.
 //!
+//! # Should I use this crate?
+//! Use it when a navigation stack hands goals to a motion stack one at a time
+//! and needs a single place that decides when a goal is reached, stuck, timed
+//! out or invalidated, and which new goal may pre-empt the active one. It
+//! works on any platform through the small `MotionStack` and `Clock` traits,
+//! depends only on nalgebra and serde, and knows nothing of maps or planners.
+//! If your planner already owns the goal lifecycle (for example a ROS action
+//! server with its own feedback), you do not need it.
+//!
 //! # API themes
 //! * [`Executor`]: lifecycle `Active -> Reached | Failed(reason) |
 //!   Preempted`, one [`ExecutorEvent::Finished`] per mission.
@@ -60,6 +69,7 @@
 //! assert!(matches!(events[1], ExecutorEvent::ExploreFromRegion { cluster: ClusterId(4), .. }));
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.

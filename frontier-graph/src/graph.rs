@@ -293,13 +293,20 @@ impl FrontierGraph {
 
     /// Exports G_F to petgraph: node weights are [`NodeId`]s (robot first,
     /// then home, then frontiers by id), edge weights are costs. Also returns
-    /// the index of every node.
+    /// the index of every node. The graph types are those of the
+    /// re-exported [`crate::petgraph`] (a 0.x crate: its version is part of
+    /// this crate's API).
     ///
     /// # Complexity
     /// O(V + E).
-    pub fn to_petgraph(&self) -> (UnGraph<NodeId, f64>, FxHashMap<NodeId, NodeIndex>) {
+    pub fn to_petgraph(
+        &self,
+    ) -> (
+        UnGraph<NodeId, f64>,
+        std::collections::HashMap<NodeId, NodeIndex>,
+    ) {
         let mut g = UnGraph::with_capacity(self.frontiers.len() + 2, self.edges.len());
-        let mut index = FxHashMap::default();
+        let mut index = std::collections::HashMap::new();
         for id in self.node_ids() {
             index.insert(id, g.add_node(id));
         }

@@ -89,7 +89,13 @@
 //! ~20 000 edges takes 25-60 ms on one core, versus 2.9 s for a naive
 //! rebuild (one full Dijkstra per node).
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
+
+/// The README's examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 
 mod cell;
 mod components;
@@ -114,3 +120,7 @@ pub use grid::{CellState, OccupancyGrid};
 pub use levels::{Level, Location, MultiLevelMap, STAIR_FRONTIER_BASE};
 pub use map::{FrontierMap, RefreshStats, UpdateStats, path_cells};
 pub use stairs::{Stair, StairEnd};
+
+/// petgraph, re-exported deliberately: [`FrontierGraph::to_petgraph`]
+/// returns its types, so callers use this (0.x) version through this path.
+pub use petgraph;

@@ -232,8 +232,8 @@ pub struct DecisionStatus {
     /// The rule that decided (serialised `policy_evaluated`,
     /// `target_confirmed`, ...).
     pub step: DecisionStep,
-    /// What was done (`explore`, `relocate`, `stop`, ...).
-    pub action: String,
+    /// What was done (serialised `explore`, `relocate`, `stop`, ...).
+    pub action: sornav::DecisionAction,
     /// Why.
     pub reason: String,
 }
@@ -1129,7 +1129,7 @@ impl Bridge {
                 .map(|d| DecisionStatus {
                     at_s: d.at.as_secs_f64(),
                     step: d.step,
-                    action: d.action.clone(),
+                    action: d.action,
                     reason: d.reason.clone(),
                 }),
             confirmed: self.confirmed.clone(),

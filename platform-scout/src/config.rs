@@ -18,21 +18,10 @@ use crate::contract::Topics;
 /// Errors of loading and validating a [`ScoutConfig`].
 #[derive(Debug, thiserror::Error)]
 pub enum ConfigError {
-    /// The file cannot be read.
-    #[error("cannot read {path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// Why.
-        #[source]
-        source: std::io::Error,
-    },
-    /// Malformed TOML or an unknown field.
-    #[error("invalid TOML: {0}")]
-    Toml(#[from] toml::de::Error),
-    /// Serialising to TOML failed.
-    #[error("cannot write TOML: {0}")]
-    TomlSer(#[from] toml::ser::Error),
+    /// Reading, parsing (malformed TOML, unknown field) or writing the
+    /// TOML document failed (`sornav`'s shared TOML loader).
+    #[error("scout configuration: {0}")]
+    Toml(#[from] sornav::TomlError),
     /// A value is out of range.
     #[error("invalid `{field}`: {message}")]
     Invalid {
@@ -497,7 +486,7 @@ impl ScoutConfig {
     /// # Errors
     /// [`ConfigError::Toml`] and those of [`validate`](Self::validate).
     pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
-        let config: Self = toml::from_str(text)?;
+        let config: Self = sornav::toml_file::from_str(text)?;
         config.validate()?;
         Ok(config)
     }
@@ -528,21 +517,21 @@ impl ScoutConfig {
     /// Reads, parses and validates a TOML file.
     ///
     /// # Errors
-    /// [`ConfigError::Io`] and those of [`from_toml`](Self::from_toml).
+    /// [`ConfigError::Toml`] when the file cannot be read or parsed (the
+    /// error names the file and line), and every error of
+    /// [`validate`](Self::validate).
     pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        Self::from_toml(&text)
+        let config: Self = sornav::toml_file::from_file(path)?;
+        config.validate()?;
+        Ok(config)
     }
 
     /// The configuration as TOML (every field).
     ///
     /// # Errors
-    /// [`ConfigError::TomlSer`].
+    /// [`ConfigError::Toml`].
     pub fn to_toml(&self) -> Result<String, ConfigError> {
-        Ok(toml::to_string(self)?)
+        Ok(sornav::toml_file::to_string(self)?)
     }
 
     /// Checks every section and the agent configuration derived from it.

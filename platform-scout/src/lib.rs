@@ -67,6 +67,7 @@
 //! # Ok::<(), CloudError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.
@@ -82,3 +83,10 @@ pub mod markers;
 pub mod msg;
 pub mod node;
 pub mod pointcloud;
+
+/// ros2-client and RustDDS, re-exported deliberately: [`node`] hands out
+/// their (0.x) `Context`, `Node`, publisher, subscription and QoS types, so
+/// callers use exactly these versions through these paths.
+pub use ros2_client;
+/// See [`ros2_client`].
+pub use rustdds;

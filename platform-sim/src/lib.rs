@@ -15,7 +15,7 @@
 //!
 //! # API themes
 //!
-//! * **Scenes**: [`Scene`] (mesh + BVH + labels), [`SceneDescription`] (its
+//! * **Scenes**: [`Scene`] (labelled mesh), [`SceneDescription`] (its
 //!   serde form), [`ObjectInstance`], [`Level`], [`Room`].
 //! * **Sources**: [`Scene::procedural`], [`Scene::from_home_xml`],
 //!   [`Scene::from_sh3d`], [`Scene::from_gltf`].
@@ -32,6 +32,18 @@
 //!   [`metrics`] (success, SPL, soft SPL, failure taxonomy).
 //!
 //! Coordinates are right-handed, z up, metres, everywhere.
+//!
+//! # Data attribution
+//!
+//! The library embeds `data/hm3d_val_stats.json` ([`procedural::HouseStats::embedded`]):
+//! floors, rooms, navigable area and per-room-type object counts derived
+//! from the HM3D-Semantics v0.2 statistics (K. Yadav et al., "Habitat-Matterport
+//! 3D Semantics Dataset", CVPR 2023; matterport/habitat-matterport-3dresearch),
+//! validation scenes 00800-00899 only. No scan, mesh or raw statistics file is
+//! shipped. HM3D-Semantics is distributed under the *Matterport End User
+//! License Agreement for Academic Use of Model Data*; the derived figures are
+//! provided under those terms (academic, non-commercial research). The crate's
+//! MIT OR Apache-2.0 licence covers its code, not that data.
 //!
 //! # Example
 //!
@@ -53,7 +65,13 @@
 //! ```
 
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
+
+/// The README's examples, compiled and run as doctests.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+pub struct ReadmeDoctests;
 
 pub mod category;
 pub mod error;
@@ -73,8 +91,7 @@ pub use levels::{FloorRelation, NavLevel, floor_relation};
 pub use navmesh::{NavMesh, NavMeshConfig, Span, SpanId};
 pub use procedural::ProceduralConfig;
 pub use scene::{
-    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, RayHit, Room, RoomType, Scene,
-    SceneDescription,
+    Aabb, InstanceId, InstanceKind, Level, ObjectInstance, Room, RoomType, Scene, SceneDescription,
 };
 pub mod agent;
 pub mod episodes;

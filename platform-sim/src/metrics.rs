@@ -54,15 +54,22 @@ impl Outcome {
     }
 }
 
-/// What happened, as the loop saw it (input of [`classify`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct Termination {
+/// How an episode's loop ended (input of [`classify`]): exactly one of
+/// STOP, the action budget or the wall-clock budget.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Termination {
     /// The policy called STOP.
-    pub stopped: bool,
+    Stopped {
+        /// Habitat success: STOP within the success distance of a view point.
+        success: bool,
+        /// STOP within the object distance of a goal object.
+        near_object: bool,
+    },
     /// The action budget ran out.
-    pub step_limit: bool,
+    StepLimit,
     /// The wall-clock budget ran out.
-    pub timeout: bool,
+    Timeout,
 }
 
 /// SPL of one episode: `success * l / max(p, l)`; 0 when `l` is not positive
@@ -97,20 +104,18 @@ pub fn soft_spl(dtg_end: f64, dtg_start: f64, shortest: f64, path: f64) -> f64 {
 
 /// The outcome of an episode.
 ///
-/// `success` and `near_object` (STOP within the object boundary) apply only
-/// when the agent stopped. Whether the goal is on another floor is no
+/// Success and a stop near the object exist only for a STOP
+/// ([`Termination::Stopped`]). Whether the goal is on another floor is no
 /// cause: it is recorded apart ([`EpisodeResult::cross_floor`]).
-pub fn classify(t: Termination, success: bool, near_object: bool) -> Outcome {
-    if t.stopped && success {
-        Outcome::Success
-    } else if t.step_limit {
-        Outcome::StepLimit
-    } else if t.timeout {
-        Outcome::Timeout
-    } else if t.stopped && !near_object {
-        Outcome::FalseStop
-    } else {
-        Outcome::Other
+pub fn classify(t: Termination) -> Outcome {
+    match t {
+        Termination::Stopped { success: true, .. } => Outcome::Success,
+        Termination::StepLimit => Outcome::StepLimit,
+        Termination::Timeout => Outcome::Timeout,
+        Termination::Stopped {
+            near_object: false, ..
+        } => Outcome::FalseStop,
+        Termination::Stopped { .. } => Outcome::Other,
     }
 }
 
@@ -318,28 +323,16 @@ mod tests {
 
     #[test]
     fn taxonomy_order() {
-        let t = |stopped, step_limit, timeout| Termination {
-            stopped,
-            step_limit,
-            timeout,
+        let stop = |success, near_object| Termination::Stopped {
+            success,
+            near_object,
         };
-        assert_eq!(
-            classify(t(true, false, false), true, true),
-            Outcome::Success
-        );
-        assert_eq!(
-            classify(t(false, true, true), false, false),
-            Outcome::StepLimit
-        );
-        assert_eq!(
-            classify(t(false, false, true), false, false),
-            Outcome::Timeout
-        );
-        assert_eq!(
-            classify(t(true, false, false), false, false),
-            Outcome::FalseStop
-        );
-        assert_eq!(classify(t(true, false, false), false, true), Outcome::Other);
+        assert_eq!(classify(stop(true, true)), Outcome::Success);
+        assert_eq!(classify(stop(true, false)), Outcome::Success);
+        assert_eq!(classify(Termination::StepLimit), Outcome::StepLimit);
+        assert_eq!(classify(Termination::Timeout), Outcome::Timeout);
+        assert_eq!(classify(stop(false, false)), Outcome::FalseStop);
+        assert_eq!(classify(stop(false, true)), Outcome::Other);
         assert_eq!(spl(true, f64::NAN, 1.0), 0.0);
         assert_eq!(soft_spl(f64::INFINITY, 3.0, 3.0, 3.0), 0.0);
     }

@@ -721,11 +721,20 @@ impl NavMesh {
             .map(|r| r as u32)
     }
     /// Grid column (x, y) of span `s`.
+    ///
+    /// # Panics
+    /// If `s` is not a span of this height field (`s >= span_count()`);
+    /// span ids come from this height field's own queries
+    /// ([`NavMesh::span_at`], [`NavMesh::spans`], ...).
     pub fn span_cell(&self, s: SpanId) -> (usize, usize) {
         let c = self.span_col[s as usize] as usize;
         (c % self.width, c / self.width)
     }
     /// Centre of span `s`'s walking surface.
+    ///
+    /// # Panics
+    /// If `s` is not a span of this height field (`s >= span_count()`), as
+    /// [`NavMesh::span_cell`].
     pub fn span_center(&self, s: SpanId) -> Point3<f64> {
         let (x, y) = self.span_cell(s);
         let cs = self.config.cell_size;

@@ -193,10 +193,7 @@ impl NoiseModel {
         if c.depth_sigma > 0.0 {
             for d in frame.depth.iter_mut().filter(|d| **d > 0.0) {
                 let z = f64::from(*d);
-                // Box-Muller standard normal.
-                let u1: f64 = rng.random_range(f64::MIN_POSITIVE..1.0);
-                let u2: f64 = rng.random();
-                let n = (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos();
+                let n: f64 = rng.sample(rand_distr::StandardNormal);
                 *d = (z + c.depth_sigma * z * z * n).max(1e-3) as f32;
             }
         }

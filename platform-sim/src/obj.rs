@@ -21,12 +21,16 @@ pub struct ObjMesh {
 }
 
 impl ObjMesh {
-    /// Bounds of the vertices used by triangles.
+    /// Bounds of the vertices used by triangles. Indices out of range (the
+    /// fields are public; [`parse_obj`] never produces them) are ignored;
+    /// without any valid index the box is empty ([`Aabb::empty`]).
     pub fn bounds(&self) -> Aabb {
         let mut b = Aabb::empty();
         for t in &self.triangles {
             for &i in t {
-                b.include(&self.vertices[i as usize]);
+                if let Some(v) = self.vertices.get(i as usize) {
+                    b.include(v);
+                }
             }
         }
         b

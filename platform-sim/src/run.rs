@@ -37,6 +37,14 @@ use crate::agent::{Action, Agent, AgentConfig, AgentError};
 use crate::episodes::Episode;
 use crate::geodesic::GeodesicField;
 use crate::metrics::{self, EpisodeResult, Termination};
+
+/// How [`run_episode`]'s loop ended (before the end pose is scored).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LoopEnd {
+    Stopped,
+    StepLimit,
+    Timeout,
+}
 use crate::policy::Policy;
 use crate::render::{Camera, CameraConfig, Frame, RenderError};
 use crate::{Aabb, NavError, NavMesh, NavMeshConfig, Scene, SceneError};
@@ -325,21 +333,16 @@ pub fn run_episode(
     policy.reset(sim, episode);
     let needs_frames = policy.needs_frames();
     let (mut actions, mut collisions, mut path) = (0usize, 0usize, 0.0f64);
-    let mut term = Termination {
-        stopped: false,
-        step_limit: false,
-        timeout: false,
-    };
     let mut step_ms = Vec::new();
     let seed_base = config.noise_seed ^ hash_str(&episode.episode_id);
     // the budget counts from the first observation on (setup excluded)
     let clock = Instant::now();
     let spent = |clock: &Instant| clock.elapsed().as_secs_f64() > config.wall_clock_s;
-    loop {
+    // How the loop ended: STOP, step limit or timeout.
+    let loop_end = loop {
         // (before the first observation nothing has been counted yet)
         if actions > 0 && spent(&clock) {
-            term.timeout = true;
-            break;
+            break LoopEnd::Timeout;
         }
         let ts = Instant::now();
         let frame =
@@ -360,30 +363,28 @@ pub fn run_episode(
         if spent(&clock) {
             // the action came after the budget ran out: discarded
             step_ms.push(ts.elapsed().as_secs_f64() * 1e3);
-            term.timeout = true;
-            break;
+            break LoopEnd::Timeout;
         }
         actions += 1;
-        if action == Action::Stop {
-            term.stopped = true;
-        } else {
+        let stopped = action == Action::Stop;
+        if !stopped {
             let out = agent.step(nav, action);
             path += out.moved;
             collisions += usize::from(out.collided);
         }
         step_ms.push(ts.elapsed().as_secs_f64() * 1e3);
-        if term.stopped {
-            break;
+        if stopped {
+            break LoopEnd::Stopped;
         }
         if actions >= config.max_actions {
-            term.step_limit = true;
-            break;
+            break LoopEnd::StepLimit;
         }
-    }
+    };
+    let stopped = loop_end == LoopEnd::Stopped;
     let timed_s = clock.elapsed().as_secs_f64();
     let end = agent.position();
     let dtg = field.distance(nav, &end).ok().filter(|d| d.is_finite());
-    let success = term.stopped && dtg.is_some_and(|d| d <= config.success_distance);
+    let success = stopped && dtg.is_some_and(|d| d <= config.success_distance);
     let near_object = sim.distance_to_goal_objects(episode, &end) <= config.object_distance;
     // Floors from the height field's levels (the same definition for
     // generated and imported episodes; `episode.cross_floor` is not read).
@@ -403,7 +404,7 @@ pub fn run_episode(
         scene_id: episode.scene_id.clone(),
         object_category: episode.object_category.clone(),
         success,
-        success_1m: term.stopped && near_object,
+        success_1m: stopped && near_object,
         spl: metrics::spl(success, shortest, path),
         soft_spl: metrics::soft_spl(dtg.unwrap_or(f64::INFINITY), start_d, shortest, path),
         start_geodesic_m: start_d,
@@ -415,7 +416,14 @@ pub fn run_episode(
         goal_level: floors.goal_level,
         floors_between: floors.floors_between,
         cross_floor: floors.cross_floor(),
-        outcome: metrics::classify(term, success, near_object),
+        outcome: metrics::classify(match loop_end {
+            LoopEnd::Stopped => Termination::Stopped {
+                success,
+                near_object,
+            },
+            LoopEnd::StepLimit => Termination::StepLimit,
+            LoopEnd::Timeout => Termination::Timeout,
+        }),
         wall_s: t0.elapsed().as_secs_f64(),
         timed_s,
         step_ms_p50: step_ms.get(step_ms.len() / 2).copied().unwrap_or(0.0),

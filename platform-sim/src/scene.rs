@@ -6,14 +6,11 @@
 //! name, a level and an axis-aligned bounding box. Coordinates are right-handed,
 //! z up, metres.
 //!
-//! The mesh is held as a parry3d `TriMesh` with its BVH for ray casting
-//! ([`Scene::cast_ray`]); the plain data (vertices, triangles, per-triangle
-//! instance) is available through [`Scene::vertices`], [`Scene::triangles`] and
-//! [`Scene::triangle_instances`].
+//! The mesh is plain data (vertices, triangles, per-triangle instance:
+//! [`Scene::vertices`], [`Scene::triangles`] and [`Scene::triangle_instances`]);
+//! ray casting is the renderer's job ([`crate::Bvh`], [`crate::Camera`]).
 
 use nalgebra::{Point2, Point3, Vector3};
-use parry3d::query::Ray;
-use parry3d::shape::{CompositeShapeRef, TriMesh};
 use serde::{Deserialize, Serialize};
 
 use crate::SceneError;
@@ -252,20 +249,7 @@ pub struct SceneDescription {
     pub triangle_instances: Vec<InstanceId>,
 }
 
-/// A ray-cast hit.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RayHit {
-    /// Distance along the (normalised) ray direction.
-    pub distance: f64,
-    /// Index of the triangle hit.
-    pub triangle: u32,
-    /// Instance of the triangle hit.
-    pub instance: InstanceId,
-    /// Unit normal of the surface at the hit, facing the ray origin.
-    pub normal: Vector3<f64>,
-}
-
-/// A labelled triangle-mesh scene with a BVH.
+/// A validated, labelled triangle-mesh scene.
 ///
 /// Build one with [`Scene::procedural`], [`Scene::from_home_xml`],
 /// [`Scene::from_sh3d`], [`Scene::from_gltf`] or [`Scene::from_description`].
@@ -274,7 +258,6 @@ pub struct RayHit {
 #[serde(try_from = "SceneDescription", into = "SceneDescription")]
 pub struct Scene {
     desc: SceneDescription,
-    mesh: TriMesh,
 }
 
 impl std::fmt::Debug for Scene {
@@ -309,7 +292,7 @@ impl From<Scene> for SceneDescription {
 }
 
 impl Scene {
-    /// Validates a description and builds the BVH.
+    /// Validates a description.
     ///
     /// # Errors
     /// [`SceneError::Empty`] without triangles; [`SceneError::Invalid`] for
@@ -317,7 +300,7 @@ impl Scene {
     /// rooms out of range, or non-finite vertices.
     ///
     /// # Complexity
-    /// O(T log T) for T triangles (BVH construction).
+    /// O(V + T + I) for V vertices, T triangles and I instances.
     pub fn from_description(desc: SceneDescription) -> Result<Scene, SceneError> {
         if desc.triangles.is_empty() {
             return Err(SceneError::Empty(format!(
@@ -382,14 +365,7 @@ impl Scene {
                 "triangle {t} has unknown instance"
             )));
         }
-        let verts: Vec<glam::Vec3> = desc
-            .vertices
-            .iter()
-            .map(|v| glam::Vec3::from_array(*v))
-            .collect();
-        let mesh = TriMesh::new(verts, desc.triangles.clone())
-            .map_err(|e| SceneError::Invalid(format!("triangle mesh: {e:?}")))?;
-        Ok(Scene { desc, mesh })
+        Ok(Scene { desc })
     }
 
     /// The serialisable description.
@@ -469,52 +445,5 @@ impl Scene {
             ));
         }
         b
-    }
-    /// The parry3d triangle mesh (with BVH). parry3d types are glam-based; this
-    /// accessor is for callers that want parry's queries directly.
-    pub fn trimesh(&self) -> &TriMesh {
-        &self.mesh
-    }
-
-    /// Casts a ray against the mesh (both faces) and returns the first hit.
-    /// `dir` need not be normalised; `distance` is in metres along it.
-    /// Returns `None` for a zero or non-finite direction.
-    ///
-    /// # Complexity
-    /// O(log T) expected (BVH traversal).
-    pub fn cast_ray(
-        &self,
-        origin: &Point3<f64>,
-        dir: &Vector3<f64>,
-        max_distance: f64,
-    ) -> Option<RayHit> {
-        let n = dir.norm();
-        if !(n > 0.0 && n.is_finite() && origin.coords.iter().all(|c| c.is_finite())) {
-            return None;
-        }
-        let d = dir / n;
-        let ray = Ray::new(
-            glam::Vec3::new(origin.x as f32, origin.y as f32, origin.z as f32),
-            glam::Vec3::new(d.x as f32, d.y as f32, d.z as f32),
-        );
-        let (tri, hit) = CompositeShapeRef(&self.mesh).cast_local_ray_and_get_normal(
-            &ray,
-            max_distance as f32,
-            false,
-        )?;
-        let mut normal = Vector3::new(
-            f64::from(hit.normal.x),
-            f64::from(hit.normal.y),
-            f64::from(hit.normal.z),
-        );
-        if normal.dot(&d) > 0.0 {
-            normal = -normal;
-        }
-        Some(RayHit {
-            distance: f64::from(hit.time_of_impact),
-            triangle: tri,
-            instance: self.desc.triangle_instances[tri as usize],
-            normal,
-        })
     }
 }

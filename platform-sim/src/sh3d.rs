@@ -515,6 +515,164 @@ impl Scene {
     }
 }
 
+/// Staircase footprints with the vertical range they cut through slabs.
+type StairCutout = (Vec<Point2<f64>>, f64, f64);
+
+/// The floor and ceiling slabs of room `r` (outline `poly`, on level `l`
+/// described by `lv`), as visible in the home, with the footprints of the
+/// staircases that pass through each slab cut out.
+fn room_surfaces(
+    b: &mut MeshBuilder,
+    r: &XmlRoom,
+    poly: &[Point2<f64>],
+    l: usize,
+    lv: &Level,
+    stairs: &[StairCutout],
+) {
+    let label = if r.name.is_empty() {
+        "room".to_string()
+    } else {
+        r.name.clone()
+    };
+    let holes_at = |z: f64| -> Vec<&Vec<Point2<f64>>> {
+        stairs
+            .iter()
+            .filter(|(_, z0, z1)| z > z0 + 0.01 && z <= z1 + 0.01)
+            .map(|(f, _, _)| f)
+            .collect()
+    };
+    let triangles: Vec<Vec<Point2<f64>>> = triangulate(poly)
+        .into_iter()
+        .map(|t| t.iter().map(|&i| poly[i]).collect())
+        .collect();
+    let pieces = |z: f64| -> Vec<Vec<Point2<f64>>> {
+        let mut out = triangles.clone();
+        for h in holes_at(z) {
+            out = out
+                .into_iter()
+                .flat_map(|p| subtract_convex(&p, h))
+                .collect();
+        }
+        out
+    };
+    if r.floor_visible {
+        let inst = b.add_instance(InstanceKind::Floor, "floor", &label, l);
+        for p in pieces(lv.elevation) {
+            b.horizontal_polygon(&p, lv.elevation, true, inst);
+            b.horizontal_polygon(&p, lv.elevation - lv.floor_thickness, false, inst);
+        }
+    }
+    if r.ceiling_visible {
+        let zc = lv.elevation + lv.height;
+        let inst = b.add_instance(InstanceKind::Ceiling, "ceiling", &label, l);
+        for p in pieces(zc) {
+            b.horizontal_polygon(&p, zc, false, inst);
+        }
+    }
+}
+
+/// A door or window of the home: its level, the piece and its footprint.
+type WallOpening<'a> = (usize, &'a XmlPiece, Vec<Point2<f64>>);
+
+/// The mesh of wall `w` on level `l` (described by `lv`): straight or arc
+/// segments with their thickness, a height that may slope from start to end
+/// (`default_height` in centimetres when the wall has none), joined ends
+/// extended by half the thickness, and the doors and windows on that level
+/// that cross it cut out.
+///
+/// # Errors
+/// [`SceneError::Attribute`] for a wall thickness that is not positive.
+fn wall_mesh(
+    b: &mut MeshBuilder,
+    w: &XmlWall,
+    (l, lv): (usize, &Level),
+    default_height: f64,
+    openings: &[WallOpening<'_>],
+) -> Result<(), SceneError> {
+    let h0 = w.height.unwrap_or(default_height) / 100.0;
+    let h1 = w.height_at_end.map_or(h0, |h| h / 100.0);
+    let t = w.thickness / 100.0;
+    if t <= 0.0 {
+        return Err(SceneError::Attribute {
+            element: format!("wall '{}'", w.id),
+            attribute: "thickness".into(),
+            message: "must be > 0".into(),
+        });
+    }
+    let (s, e) = (to_scene(w.start), to_scene(w.end));
+    // pieces along the wall (arc split into straight segments)
+    let pts: Vec<Point2<f64>> = match w.arc_extent {
+        Some(a) if a.abs() > 1e-3 && (e - s).norm() > 1e-6 => arc_points(s, e, -a),
+        _ => vec![s, e],
+    };
+    let total: f64 = pts.windows(2).map(|p| (p[1] - p[0]).norm()).sum();
+    if total < 1e-6 {
+        return Ok(());
+    }
+    let inst = b.add_instance(InstanceKind::Wall, "wall", &format!("wall {}", w.id), l);
+    let mut acc = 0.0;
+    let n_seg = pts.len() - 1;
+    for k in 0..n_seg {
+        let (a, c) = (pts[k], pts[k + 1]);
+        let len = (c - a).norm();
+        if len < 1e-9 {
+            continue;
+        }
+        let u = (c - a) / len;
+        let ext_s = if k == 0 && w.joined_start {
+            t * 0.5
+        } else {
+            0.0
+        };
+        let ext_e = if k + 1 == n_seg && w.joined_end {
+            t * 0.5
+        } else {
+            0.0
+        };
+        let height_at = |d: f64| h0 + (h1 - h0) * ((acc + d) / total).clamp(0.0, 1.0);
+        let mut cuts = Vec::new();
+        for (ol, p, fp) in openings {
+            if *ol != l {
+                continue;
+            }
+            let nrm = Vector2::new(-u.y, u.x);
+            let (mut lo, mut hi, mut nlo, mut nhi) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+            for q in fp {
+                let v = q - a;
+                lo = lo.min(v.dot(&u));
+                hi = hi.max(v.dot(&u));
+                nlo = nlo.min(v.dot(&nrm));
+                nhi = nhi.max(v.dot(&nrm));
+            }
+            if nhi < -t * 0.5 || nlo > t * 0.5 || hi <= 0.0 || lo >= len {
+                continue;
+            }
+            let z0 = lv.elevation + p.elevation / 100.0;
+            cuts.push(Cut {
+                lo: lo.max(-ext_s),
+                hi: hi.min(len + ext_e),
+                z0,
+                z1: z0 + p.height / 100.0,
+            });
+        }
+        wall_with_cuts(
+            b,
+            inst,
+            a,
+            u,
+            len,
+            ext_s,
+            ext_e,
+            t,
+            lv.elevation,
+            &height_at,
+            &cuts,
+        );
+        acc += len;
+    }
+    Ok(())
+}
+
 /// Builds a scene from `Home.xml` text with a model resolver.
 fn build_home(
     xml: &str,
@@ -570,7 +728,7 @@ fn build_home(
         .map(|p| level_of(&p.level, &|| p.element.clone()))
         .collect::<Result<_, SceneError>>()?;
     // staircase footprints with their vertical range
-    let mut stairs: Vec<(Vec<Point2<f64>>, f64, f64)> = Vec::new();
+    let mut stairs: Vec<StairCutout> = Vec::new();
     for (p, &l) in home.pieces.iter().zip(&piece_levels) {
         if p.staircase && p.visible && built(l) {
             let z0 = levels[l].level.elevation + p.elevation / 100.0;
@@ -601,50 +759,11 @@ fn build_home(
         if !built(l) {
             continue;
         }
-        let label = if r.name.is_empty() {
-            "room".to_string()
-        } else {
-            r.name.clone()
-        };
-        let holes_at = |z: f64| -> Vec<&Vec<Point2<f64>>> {
-            stairs
-                .iter()
-                .filter(|(_, z0, z1)| z > z0 + 0.01 && z <= z1 + 0.01)
-                .map(|(f, _, _)| f)
-                .collect()
-        };
-        let triangles: Vec<Vec<Point2<f64>>> = triangulate(&poly)
-            .into_iter()
-            .map(|t| t.iter().map(|&i| poly[i]).collect())
-            .collect();
-        let pieces = |z: f64| -> Vec<Vec<Point2<f64>>> {
-            let mut out = triangles.clone();
-            for h in holes_at(z) {
-                out = out
-                    .into_iter()
-                    .flat_map(|p| subtract_convex(&p, h))
-                    .collect();
-            }
-            out
-        };
-        if r.floor_visible {
-            let inst = b.add_instance(InstanceKind::Floor, "floor", &label, l);
-            for p in pieces(lv.elevation) {
-                b.horizontal_polygon(&p, lv.elevation, true, inst);
-                b.horizontal_polygon(&p, lv.elevation - lv.floor_thickness, false, inst);
-            }
-        }
-        if r.ceiling_visible {
-            let zc = lv.elevation + lv.height;
-            let inst = b.add_instance(InstanceKind::Ceiling, "ceiling", &label, l);
-            for p in pieces(zc) {
-                b.horizontal_polygon(&p, zc, false, inst);
-            }
-        }
+        room_surfaces(&mut b, r, &poly, l, lv, &stairs);
     }
 
     // walls with openings: (level, piece, footprint)
-    let openings: Vec<(usize, &XmlPiece, Vec<Point2<f64>>)> = home
+    let openings: Vec<WallOpening<'_>> = home
         .pieces
         .iter()
         .zip(&piece_levels)
@@ -656,88 +775,13 @@ fn build_home(
         if !built(l) {
             continue;
         }
-        let lv = &levels[l].level;
-        let h0 = w.height.unwrap_or(home.wall_height) / 100.0;
-        let h1 = w.height_at_end.map_or(h0, |h| h / 100.0);
-        let t = w.thickness / 100.0;
-        if t <= 0.0 {
-            return Err(SceneError::Attribute {
-                element: format!("wall '{}'", w.id),
-                attribute: "thickness".into(),
-                message: "must be > 0".into(),
-            });
-        }
-        let (s, e) = (to_scene(w.start), to_scene(w.end));
-        // pieces along the wall (arc split into straight segments)
-        let pts: Vec<Point2<f64>> = match w.arc_extent {
-            Some(a) if a.abs() > 1e-3 && (e - s).norm() > 1e-6 => arc_points(s, e, -a),
-            _ => vec![s, e],
-        };
-        let total: f64 = pts.windows(2).map(|p| (p[1] - p[0]).norm()).sum();
-        if total < 1e-6 {
-            continue;
-        }
-        let inst = b.add_instance(InstanceKind::Wall, "wall", &format!("wall {}", w.id), l);
-        let mut acc = 0.0;
-        let n_seg = pts.len() - 1;
-        for k in 0..n_seg {
-            let (a, c) = (pts[k], pts[k + 1]);
-            let len = (c - a).norm();
-            if len < 1e-9 {
-                continue;
-            }
-            let u = (c - a) / len;
-            let ext_s = if k == 0 && w.joined_start {
-                t * 0.5
-            } else {
-                0.0
-            };
-            let ext_e = if k + 1 == n_seg && w.joined_end {
-                t * 0.5
-            } else {
-                0.0
-            };
-            let height_at = |d: f64| h0 + (h1 - h0) * ((acc + d) / total).clamp(0.0, 1.0);
-            let mut cuts = Vec::new();
-            for (ol, p, fp) in &openings {
-                if *ol != l {
-                    continue;
-                }
-                let nrm = Vector2::new(-u.y, u.x);
-                let (mut lo, mut hi, mut nlo, mut nhi) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
-                for q in fp {
-                    let v = q - a;
-                    lo = lo.min(v.dot(&u));
-                    hi = hi.max(v.dot(&u));
-                    nlo = nlo.min(v.dot(&nrm));
-                    nhi = nhi.max(v.dot(&nrm));
-                }
-                if nhi < -t * 0.5 || nlo > t * 0.5 || hi <= 0.0 || lo >= len {
-                    continue;
-                }
-                let z0 = lv.elevation + p.elevation / 100.0;
-                cuts.push(Cut {
-                    lo: lo.max(-ext_s),
-                    hi: hi.min(len + ext_e),
-                    z0,
-                    z1: z0 + p.height / 100.0,
-                });
-            }
-            wall_with_cuts(
-                &mut b,
-                inst,
-                a,
-                u,
-                len,
-                ext_s,
-                ext_e,
-                t,
-                lv.elevation,
-                &height_at,
-                &cuts,
-            );
-            acc += len;
-        }
+        wall_mesh(
+            &mut b,
+            w,
+            (l, &levels[l].level),
+            home.wall_height,
+            &openings,
+        )?;
     }
 
     // furniture, doors, windows

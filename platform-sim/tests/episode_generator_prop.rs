@@ -12,6 +12,7 @@ mod common;
 
 fn check(sim: &Simulator, episodes: &[Episode], cfg: &GeneratorConfig) -> Result<(), String> {
     let (scene, nav) = (sim.scene(), sim.nav());
+    let parry = common::ParryMesh::new(scene);
     let cam_h = sim.camera().config().mount_height;
     for e in episodes {
         let id = &e.episode_id;
@@ -62,7 +63,7 @@ fn check(sim: &Simulator, episodes: &[Episode], cfg: &GeneratorConfig) -> Result
                     ));
                 }
                 let eye = v.position + Vector3::new(0.0, 0.0, cam_h);
-                if !common::sees(scene, &eye, object) {
+                if !common::sees(&parry, &eye, object) {
                     return Err(format!(
                         "episode {id}: view point {} does not see object {}",
                         v.position, object.id

@@ -22,6 +22,7 @@ fn simulator(scene: Scene) -> Simulator {
 fn check_constraints(sim: &Simulator, episodes: &[Episode], config: &GeneratorConfig) {
     let nav = sim.nav();
     let scene = sim.scene();
+    let parry = common::ParryMesh::new(scene);
     let cam_h = sim.camera().config().mount_height;
     for e in episodes {
         assert!(
@@ -60,7 +61,7 @@ fn check_constraints(sim: &Simulator, episodes: &[Episode], config: &GeneratorCo
                 // Some ray from the eye to the object's box first hits the object.
                 let eye = v.position + nalgebra::Vector3::new(0.0, 0.0, cam_h);
                 assert!(
-                    common::sees(scene, &eye, obj),
+                    common::sees(&parry, &eye, obj),
                     "view point {:?} does not see object {}",
                     v.position,
                     obj.id

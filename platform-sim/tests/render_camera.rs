@@ -391,7 +391,7 @@ proptest! {
 }
 
 /// Differential test on a real scene: every pixel of the camera agrees with
-/// parry's independent ray cast (`Scene::cast_ray`) on a procedural house.
+/// parry's independent ray cast (parry3d, a dev-dependency) on a procedural house.
 #[test]
 fn camera_matches_parry_on_a_procedural_house() {
     use sornav_platform_sim::{NavMesh, NavMeshConfig};
@@ -403,6 +403,7 @@ fn camera_matches_parry_on_a_procedural_house() {
         ..CameraConfig::default()
     };
     let camera = Camera::for_scene(&scene, config.clone()).unwrap();
+    let parry = common::ParryMesh::new(&scene);
     let (mut pixels, mut mismatches) = (0usize, 0usize);
     for k in 0..6u32 {
         let feet = nav.span_center((k as usize * nav.span_count() / 6) as u32);
@@ -416,7 +417,7 @@ fn camera_matches_parry_on_a_procedural_house() {
                 let d = f + r * a + up * b;
                 let i = frame.index(u, v);
                 pixels += 1;
-                match scene.cast_ray(&pose.position, &d, 1e3) {
+                match parry.cast_ray(&pose.position, &d, 1e3) {
                     // parry's distance is along the normalised direction; z-depth = that / |d|.
                     Some(hit) => {
                         let z = hit.distance / d.norm();
@@ -456,6 +457,7 @@ fn noise_invariants_and_unprojection() {
         ..CameraConfig::default()
     };
     let clean_cam = Camera::for_scene(&scene, base.clone()).unwrap();
+    let parry = common::ParryMesh::new(&scene);
     let mut flip = base.clone();
     flip.noise.boundary_flip_rate = 1.0;
     let flip_cam = Camera::for_scene(&scene, flip).unwrap();
@@ -512,7 +514,7 @@ fn noise_invariants_and_unprojection() {
         for (u, v) in [(10u32, 10u32), (48, 36), (90, 70)] {
             if let Some(p) = clean.unproject(&base, u, v) {
                 let d = p - pose.position;
-                let hit = scene.cast_ray(&pose.position, &d, 100.0).unwrap();
+                let hit = parry.cast_ray(&pose.position, &d, 100.0).unwrap();
                 assert!((hit.distance - d.norm()).abs() < 2e-3 * d.norm().max(1.0));
             }
         }

@@ -91,6 +91,7 @@
 //! Measured figures against Bonxai and a C++ flood fill are in the crate
 //! README.
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.

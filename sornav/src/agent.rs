@@ -15,8 +15,8 @@ use sornav_frontier_graph::{FrontierGraph, FrontierId, LevelId, MultiLevelMap, N
 use sornav_semantic_map::{DepthFrame, LabelId, SemanticMap};
 use sornav_supervisor::{
     Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject, ContextPolicy,
-    LlmPolicy, MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput,
-    Supervisor, SupervisorCommand, normalize_label,
+    MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput, Supervisor,
+    SupervisorCommand, normalize_label,
 };
 use sornav_target_gate::{CandidateReport, GateCommand, NeverVisible, ObjectId, TargetGate};
 use sornav_tsp::HorizonPlan;
@@ -29,8 +29,8 @@ use crate::observation::{Observation, ObservationReport, Sensor};
 use crate::ordering::{self, OrderingInput, Route};
 use crate::path_cost::MapPathCost;
 use crate::snapshot::{
-    AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,
-    RelocationRecord,
+    AgentSnapshot, AgentStats, Decision, DecisionAction, DecisionStep, ObjectRecord,
+    OccupancyRaster, RelocationRecord,
 };
 use crate::target::{Target, Vocabulary};
 
@@ -233,7 +233,11 @@ fn build_policy(config: &PolicyConfig) -> Result<BoxedPolicy, AgentError> {
     Ok(match config {
         PolicyConfig::Commonsense(c) => Box::new(CommonsensePolicy::embedded(c.clone())?),
         PolicyConfig::NeverRelocate => Box::new(NeverRelocate),
-        PolicyConfig::Llm(c) => Box::new(LlmPolicy::http(c.clone())?),
+        #[cfg(feature = "llm")]
+        PolicyConfig::Llm(c) => Box::new(sornav_supervisor::LlmPolicy::http(c.clone())?),
+        // Rejected by `AgentConfig::validate` in builds without `llm`.
+        #[cfg(not(feature = "llm"))]
+        PolicyConfig::Llm(_) => return Err(crate::config::llm_disabled().into()),
     })
 }
 
@@ -877,14 +881,14 @@ impl Agent {
         &mut self,
         at: Duration,
         step: DecisionStep,
-        action: &str,
+        action: DecisionAction,
         mission: Option<MissionId>,
         reason: impl Into<String>,
     ) {
         let decision = Decision {
             at,
             step,
-            action: action.to_owned(),
+            action,
             mission,
             reason: reason.into(),
         };
@@ -901,7 +905,7 @@ impl Agent {
         reason: impl Into<String>,
     ) -> AgentCommand {
         let mission = self.executor.active().map(|(id, _)| id);
-        self.decide(now, step, "continue", mission, reason);
+        self.decide(now, step, DecisionAction::Continue, mission, reason);
         AgentCommand::Continue { mission }
     }
 
@@ -913,7 +917,7 @@ impl Agent {
         now: Duration,
         mission: Mission,
         path: Vec<Point3<f64>>,
-        action: &str,
+        action: DecisionAction,
         reason: String,
     ) -> Result<AgentCommand, AgentError> {
         let step = match mission.kind {
@@ -930,7 +934,7 @@ impl Agent {
         step: DecisionStep,
         mut mission: Mission,
         path: Vec<Point3<f64>>,
-        action: &str,
+        action: DecisionAction,
         reason: String,
     ) -> Result<AgentCommand, AgentError> {
         if !path.is_empty() {
@@ -1062,7 +1066,7 @@ impl Agent {
                 self.decide(
                     now,
                     DecisionStep::TargetConfirmed,
-                    "stop",
+                    DecisionAction::Stop,
                     None,
                     format!(
                         "object {} confirmed: N_obs observations and a fresh detection after arrival",
@@ -1075,7 +1079,7 @@ impl Agent {
                 self.decide(
                     now,
                     DecisionStep::TargetVerification,
-                    "verify",
+                    DecisionAction::Verify,
                     None,
                     format!("arrived at candidate {}: face it and observe", object.0),
                 );
@@ -1315,7 +1319,13 @@ impl Agent {
                             },
                             waypoint,
                         );
-                        let cmd = self.dispatch(now, mission, path, "relocate", reason.clone())?;
+                        let cmd = self.dispatch(
+                            now,
+                            mission,
+                            path,
+                            DecisionAction::Relocate,
+                            reason.clone(),
+                        )?;
                         if let AgentCommand::Dispatch { id, .. } = &cmd {
                             self.stats.relocations += 1;
                             self.relocation = Some(RelocationRecord {
@@ -1350,9 +1360,15 @@ impl Agent {
                     _ => unreachable!("matched above"),
                 };
                 match explore {
-                    Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => {
-                        self.dispatch_as(now, step, mission, Vec::new(), "explore", reason)?
-                    }
+                    Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => self
+                        .dispatch_as(
+                            now,
+                            step,
+                            mission,
+                            Vec::new(),
+                            DecisionAction::Explore,
+                            reason,
+                        )?,
                     Some(_) => self.keep_going(now, step, reason),
                     None if active.is_none() && self.current_level().is_none() => {
                         // Between floors (on a stair, or on a floor not
@@ -1397,7 +1413,7 @@ impl Agent {
                         self.decide(
                             now,
                             step,
-                            "exhausted",
+                            DecisionAction::Exhausted,
                             None,
                             format!("no reachable frontier ({reason})"),
                         );
@@ -1437,7 +1453,7 @@ impl Agent {
             },
             back,
         );
-        self.dispatch_as(now, step, mission, path, "retreat", reason)
+        self.dispatch_as(now, step, mission, path, DecisionAction::Retreat, reason)
     }
 
     /// Off a known floor, nothing reachable, looked around: walks back
@@ -1468,7 +1484,7 @@ impl Agent {
                 self.decide(
                     now,
                     step,
-                    "exhausted",
+                    DecisionAction::Exhausted,
                     None,
                     format!("nothing reachable off a known floor, no way back ({reason})"),
                 );
@@ -1523,7 +1539,7 @@ impl Agent {
                     now,
                     mission,
                     path,
-                    "nav_to_object",
+                    DecisionAction::NavToObject,
                     format!("candidate {target_id} has N_obs supporting observations"),
                 )
             }
@@ -1542,7 +1558,7 @@ impl Agent {
         self.decide(
             now,
             DecisionStep::TargetAccepted,
-            "reject_candidate",
+            DecisionAction::RejectCandidate,
             None,
             format!("candidate {target_id}: {why}"),
         );
@@ -1644,7 +1660,7 @@ impl Agent {
                     DecisionStep::TargetAccepted,
                     mission,
                     Vec::new(),
-                    "explore",
+                    DecisionAction::Explore,
                     format!("candidate {target_id} is on another floor: taking the stairs to it"),
                 )
             }

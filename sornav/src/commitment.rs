@@ -30,7 +30,7 @@ use nalgebra::Point3;
 use serde::{Deserialize, Serialize};
 use sornav_frontier_graph::{FrontierGraph, FrontierId, NodeId};
 
-use crate::ordering::{self, Route};
+use crate::ordering::{self, OrderingKind, Route};
 
 /// Settings of the exploration commitment.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -130,7 +130,7 @@ fn cost(graph: &FrontierGraph, a: NodeId, b: NodeId) -> Option<f64> {
 }
 
 /// The extra cost of visiting `committed` before the route's first
-/// frontier: for a TSP route (`route.ordering == "tsp"`; its tour is
+/// frontier: for a TSP route (`route.ordering == OrderingKind::Tsp`; its tour is
 /// `route.first` then `route.order`) the insertion of `committed` at the
 /// front minus the saving of removing it from its later place in the
 /// tour; for a ranking the difference of the first legs.
@@ -144,7 +144,7 @@ pub(crate) fn detour(graph: &FrontierGraph, route: &Route, committed: FrontierId
     let first = NodeId::Frontier(route.first);
     let to_c = cost(graph, robot, c)?;
     let to_first = cost(graph, robot, first)?;
-    if route.ordering != "tsp" {
+    if route.ordering != OrderingKind::Tsp {
         return Some(to_c - to_first);
     }
     let insertion = to_c + cost(graph, c, first)? - to_first;

@@ -40,7 +40,9 @@ pub enum PolicyConfig {
     Commonsense(CommonsenseConfig),
     /// Never relocate (the paper's first ablation).
     NeverRelocate,
-    /// An OpenAI-compatible LLM endpoint.
+    /// An OpenAI-compatible LLM endpoint. Parses in every build; a build
+    /// without the `llm` cargo feature rejects it in
+    /// [`AgentConfig::validate`] (no HTTP client is compiled in).
     Llm(LlmConfig),
 }
 
@@ -280,6 +282,14 @@ fn household_labels() -> Vec<LabelEntry> {
         .collect()
 }
 
+/// The error for `PolicyConfig::Llm` in a build without the `llm` feature.
+pub(crate) fn llm_disabled() -> ConfigError {
+    component(
+        "policy",
+        "the LLM policy needs sornav's `llm` cargo feature, which this build leaves out",
+    )
+}
+
 fn component(component: &'static str, e: impl std::fmt::Display) -> ConfigError {
     ConfigError::Component {
         component,
@@ -363,7 +373,7 @@ impl AgentConfig {
     /// [`ConfigError::Toml`] for malformed TOML or unknown fields, and every
     /// error of [`validate`](Self::validate).
     pub fn from_toml(text: &str) -> Result<Self, ConfigError> {
-        let config: Self = toml::from_str(text)?;
+        let config: Self = crate::toml_file::from_str(text)?;
         config.validate()?;
         Ok(config)
     }
@@ -371,21 +381,21 @@ impl AgentConfig {
     /// Reads, parses and validates a TOML file.
     ///
     /// # Errors
-    /// [`ConfigError::Io`] and those of [`from_toml`](Self::from_toml).
+    /// [`ConfigError::Toml`] when the file cannot be read or parsed (the
+    /// error names the file and line), and every error of
+    /// [`validate`](Self::validate).
     pub fn from_toml_file(path: &Path) -> Result<Self, ConfigError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
-            path: path.display().to_string(),
-            source,
-        })?;
-        Self::from_toml(&text)
+        let config: Self = crate::toml_file::from_file(path)?;
+        config.validate()?;
+        Ok(config)
     }
 
     /// The configuration as a TOML document (complete: every field).
     ///
     /// # Errors
-    /// [`ConfigError::TomlSer`] (not expected for valid configurations).
+    /// [`ConfigError::Toml`] (not expected for valid configurations).
     pub fn to_toml(&self) -> Result<String, ConfigError> {
-        Ok(toml::to_string(self)?)
+        Ok(crate::toml_file::to_string(self)?)
     }
 
     /// The label vocabulary as the semantic map's [`LabelSet`].
@@ -455,7 +465,12 @@ impl AgentConfig {
                 )?;
             }
             PolicyConfig::NeverRelocate => {}
-            PolicyConfig::Llm(c) => c.validate().map_err(|e| component("policy", e))?,
+            PolicyConfig::Llm(c) => {
+                if !cfg!(feature = "llm") {
+                    return Err(llm_disabled());
+                }
+                c.validate().map_err(|e| component("policy", e))?;
+            }
         }
         if let FrontierOrdering::SemanticRanking(s) = &self.ordering {
             let ok = |v: f64| v.is_finite() && v >= 0.0;

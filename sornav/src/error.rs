@@ -14,21 +14,10 @@ use sornav_tsp::TspError;
 #[derive(Debug, Error)]
 #[non_exhaustive]
 pub enum ConfigError {
-    /// The TOML text does not parse or names an unknown field.
-    #[error("agent configuration does not parse: {0}")]
-    Toml(#[from] toml::de::Error),
-    /// Serialising the configuration to TOML failed.
-    #[error("agent configuration does not serialise: {0}")]
-    TomlSer(#[from] toml::ser::Error),
-    /// Reading the configuration file failed.
-    #[error("reading {path}: {source}")]
-    Io {
-        /// The file.
-        path: String,
-        /// The cause.
-        #[source]
-        source: std::io::Error,
-    },
+    /// Reading, parsing (malformed TOML, unknown field) or writing the
+    /// TOML document failed.
+    #[error("agent configuration: {0}")]
+    Toml(#[from] crate::toml_file::TomlError),
     /// One component's configuration is out of range.
     #[error("invalid {component} configuration: {message}")]
     Component {

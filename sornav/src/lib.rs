@@ -31,6 +31,17 @@
 //!
 //! The agent's maps are built only from its observations.
 //!
+//! # Cargo features
+//! * `llm` (default): [`PolicyConfig::Llm`] builds the supervisor's
+//!   OpenAI-compatible LLM policy (an HTTP client). With
+//!   `default-features = false` no HTTP or TLS crate is compiled and
+//!   [`AgentConfig::validate`] rejects that policy.
+//!
+//! # Data
+//! The default policy embeds the supervisor's commonsense prior, derived
+//! from HM3D-Semantics train scenes and provided under HM3D's terms (see
+//! [`supervisor`]'s "Data attribution").
+//!
 //! # Example
 //! A robot in a 6 m x 4 m room with a doorway, looking for a television
 //! that is in the room:
@@ -94,12 +105,47 @@
 //! # Ok::<(), sornav::AgentError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+/// Implements `as_str`, `Display`, `PartialEq<str>` and `PartialEq<&str>`
+/// for a fieldless enum from `Variant => "name"` pairs (its serde names),
+/// so that the enum reads and compares like the string it replaces.
+macro_rules! snake_case_names {
+    ($ty:ident { $($variant:ident => $name:literal),+ $(,)? }) => {
+        impl $ty {
+            /// The snake-case name, as serialised.
+            pub fn as_str(self) -> &'static str {
+                match self {
+                    $($ty::$variant => $name,)+
+                }
+            }
+        }
+
+        impl std::fmt::Display for $ty {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str(self.as_str())
+            }
+        }
+
+        impl PartialEq<str> for $ty {
+            fn eq(&self, other: &str) -> bool {
+                self.as_str() == other
+            }
+        }
+
+        impl PartialEq<&str> for $ty {
+            fn eq(&self, other: &&str) -> bool {
+                self.as_str() == *other
+            }
+        }
+    };
+}
 
 mod agent;
 mod approach;
@@ -111,6 +157,7 @@ mod ordering;
 mod path_cost;
 mod snapshot;
 mod target;
+pub mod toml_file;
 
 pub use agent::{Agent, AgentCommand, BoxedPolicy};
 pub use commitment::CommitmentConfig;
@@ -123,12 +170,13 @@ pub use observation::{
     CloudObservation, DepthObservation, Observation, ObservationReport, OccupancyObservation,
     Sensor, occupancy_stride,
 };
-pub use ordering::Route;
+pub use ordering::{OrderingKind, Route};
 pub use snapshot::{
-    AgentSnapshot, AgentStats, Decision, DecisionStep, ObjectRecord, OccupancyRaster,
-    RelocationRecord,
+    AgentSnapshot, AgentStats, Decision, DecisionAction, DecisionStep, ObjectRecord,
+    OccupancyRaster, RelocationRecord, UnknownDecisionAction,
 };
 pub use target::{Target, Vocabulary};
+pub use toml_file::TomlError;
 
 /// The components, re-exported so that platforms and examples need only
 /// this crate.

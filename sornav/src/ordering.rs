@@ -13,11 +13,42 @@ use sornav_tsp::{CostMatrix, HorizonFrontier, HorizonPlan, HorizonProblem, Reced
 use crate::config::{FrontierOrdering, SemanticRankingConfig};
 use crate::error::AgentError;
 
+/// Which ordering produced a [`Route`] (the kind of
+/// [`FrontierOrdering`], without its parameters). Serialises as the
+/// snake-case name and compares equal to it (`kind == "tsp"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum OrderingKind {
+    /// [`FrontierOrdering::Tsp`].
+    Tsp,
+    /// [`FrontierOrdering::Nearest`].
+    Nearest,
+    /// [`FrontierOrdering::SemanticRanking`].
+    SemanticRanking,
+}
+
+snake_case_names!(OrderingKind {
+    Tsp => "tsp",
+    Nearest => "nearest",
+    SemanticRanking => "semantic_ranking",
+});
+
+impl FrontierOrdering {
+    /// The kind of this ordering.
+    pub fn kind(&self) -> OrderingKind {
+        match self {
+            FrontierOrdering::Tsp => OrderingKind::Tsp,
+            FrontierOrdering::Nearest => OrderingKind::Nearest,
+            FrontierOrdering::SemanticRanking(_) => OrderingKind::SemanticRanking,
+        }
+    }
+}
+
 /// The exploration route of one step.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Route {
-    /// Which ordering produced it (`tsp`, `nearest`, `semantic_ranking`).
-    pub ordering: String,
+    /// Which ordering produced it.
+    pub ordering: OrderingKind,
     /// Frontiers in visiting order (TSP), or by decreasing preference.
     pub order: Vec<FrontierId>,
     /// The frontier to explore now: the ordering's first, or the frontier
@@ -147,7 +178,7 @@ fn tsp(
     let route = plan.as_ref().and_then(|p| {
         let first = cands.iter().find(|c| c.id == p.first)?;
         Some(Route {
-            ordering: "tsp".into(),
+            ordering: OrderingKind::Tsp,
             order: p.order.clone(),
             first: p.first,
             first_viewpoint: first.viewpoint,
@@ -161,7 +192,7 @@ fn tsp(
 }
 
 /// Candidates by decreasing `scores` (aligned with `cands`), ties by id.
-fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
+fn ranked(kind: OrderingKind, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
     let mut idx: Vec<usize> = (0..cands.len()).collect();
     idx.sort_by(|&a, &b| {
         scores[b]
@@ -170,7 +201,7 @@ fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
     });
     let best = &cands[*idx.first()?];
     Some(Route {
-        ordering: name.into(),
+        ordering: kind,
         order: idx.iter().map(|&i| cands[i].id).collect(),
         first: best.id,
         first_viewpoint: best.viewpoint,
@@ -182,7 +213,7 @@ fn ranked(name: &str, cands: &[Reachable], scores: &[f64]) -> Option<Route> {
 
 fn nearest(cands: &[Reachable]) -> Option<Route> {
     let scores: Vec<f64> = cands.iter().map(|c| -c.cost).collect();
-    ranked("nearest", cands, &scores)
+    ranked(OrderingKind::Nearest, cands, &scores)
 }
 
 /// `P(g | labels of the objects with support >= N_min within R_s of the
@@ -211,7 +242,7 @@ fn semantic(
                 - weights.distance_weight * c.cost
         })
         .collect();
-    ranked("semantic_ranking", cands, &scores)
+    ranked(OrderingKind::SemanticRanking, cands, &scores)
 }
 
 #[cfg(test)]

@@ -35,6 +35,75 @@ pub enum DecisionStep {
     RegionDwell,
 }
 
+/// What a [`Decision`] did. Serialises as the snake-case name
+/// (`"nav_to_object"`), compares equal to that name (`action == "relocate"`)
+/// and parses from it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DecisionAction {
+    /// The target is confirmed: STOP.
+    Stop,
+    /// Face the candidate and observe it again.
+    Verify,
+    /// Approach a target candidate (`NAV_TO_OBJECT`).
+    NavToObject,
+    /// Relocate to another cluster.
+    Relocate,
+    /// Explore a frontier.
+    Explore,
+    /// Keep the active mission.
+    Continue,
+    /// Nothing reachable is left to explore.
+    Exhausted,
+    /// Walk back along the robot's own trail to the last floor it stood on
+    /// (a relocation outside any cluster).
+    Retreat,
+    /// A target candidate could not be approached and was set aside.
+    RejectCandidate,
+}
+
+impl DecisionAction {
+    /// Every action, in declaration order.
+    pub const ALL: [DecisionAction; 9] = [
+        DecisionAction::Stop,
+        DecisionAction::Verify,
+        DecisionAction::NavToObject,
+        DecisionAction::Relocate,
+        DecisionAction::Explore,
+        DecisionAction::Continue,
+        DecisionAction::Exhausted,
+        DecisionAction::Retreat,
+        DecisionAction::RejectCandidate,
+    ];
+}
+
+snake_case_names!(DecisionAction {
+    Stop => "stop",
+    Verify => "verify",
+    NavToObject => "nav_to_object",
+    Relocate => "relocate",
+    Explore => "explore",
+    Continue => "continue",
+    Exhausted => "exhausted",
+    Retreat => "retreat",
+    RejectCandidate => "reject_candidate",
+});
+
+/// A name that is no [`DecisionAction`].
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("unknown decision action {0:?}")]
+pub struct UnknownDecisionAction(pub String);
+
+impl std::str::FromStr for DecisionAction {
+    type Err = UnknownDecisionAction;
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        DecisionAction::ALL
+            .into_iter()
+            .find(|a| a.as_str() == s)
+            .ok_or_else(|| UnknownDecisionAction(s.to_owned()))
+    }
+}
+
 /// One decision of [`Agent::step`](crate::Agent::step).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Decision {
@@ -42,9 +111,8 @@ pub struct Decision {
     pub at: Duration,
     /// The rule that decided.
     pub step: DecisionStep,
-    /// What was done (`stop`, `verify`, `nav_to_object`, `relocate`,
-    /// `explore`, `continue`, `exhausted`).
-    pub action: String,
+    /// What was done.
+    pub action: DecisionAction,
     /// The mission dispatched or kept, if any.
     pub mission: Option<MissionId>,
     /// Why (the policy's reason for policy decisions).
@@ -195,4 +263,20 @@ pub struct AgentSnapshot {
     pub last_decision: Option<Decision>,
     /// Counters.
     pub stats: AgentStats,
+}
+
+#[cfg(test)]
+mod decision_action_tests {
+    use super::DecisionAction;
+
+    #[test]
+    fn names_round_trip_through_serde_and_from_str() {
+        for a in DecisionAction::ALL {
+            let json = serde_json::to_string(&a).unwrap();
+            assert_eq!(json, format!("\"{}\"", a.as_str()));
+            assert_eq!(a.as_str().parse::<DecisionAction>().unwrap(), a);
+            assert!(a == a.as_str());
+        }
+        assert!("jump".parse::<DecisionAction>().is_err());
+    }
 }

@@ -142,7 +142,7 @@ fn unknown_fields_and_bad_values_are_errors() {
     let missing = std::path::Path::new("/nonexistent/agent.toml");
     assert!(matches!(
         AgentConfig::from_toml_file(missing),
-        Err(ConfigError::Io { .. })
+        Err(ConfigError::Toml(sornav::TomlError::Io { .. }))
     ));
 }
 

@@ -19,6 +19,18 @@
 //! as label/support pairs, candidates as cluster id, graph distance and
 //! context), so the crate does not need the rest of sornav.
 //!
+//! # Data attribution
+//! The library embeds `data/hm3d_cooccurrence_prior.json`
+//! ([`CooccurrencePrior::embedded`]): per-label region counts derived from the
+//! HM3D-Semantics v0.2 statistics (K. Yadav et al., "Habitat-Matterport 3D
+//! Semantics Dataset", CVPR 2023; matterport/habitat-matterport-3dresearch),
+//! train scenes only. No scan, mesh or raw statistics file is shipped.
+//! HM3D-Semantics is distributed under the *Matterport End User License
+//! Agreement for Academic Use of Model Data*; the derived table is provided
+//! under those terms (academic, non-commercial research), see [`ATTRIBUTION`].
+//! The crate's MIT OR Apache-2.0 licence covers its code, not that data; a
+//! prior built from other statistics ([`CooccurrencePrior::build`]) avoids it.
+//!
 //! # API themes
 //! * Algorithm 1: [`Supervisor::step`] with [`StepInput`], [`RegionContext`]
 //!   → [`SupervisorCommand`].
@@ -72,6 +84,7 @@
 //! # Ok::<(), sornav_supervisor::SupervisorError>(())
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 mod clock;
@@ -82,7 +95,9 @@ mod evaluation;
 mod hm3d;
 mod label;
 #[cfg(feature = "llm")]
+#[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
 pub mod llm;
+mod llm_config;
 mod policy;
 mod prior;
 mod supervisor;
@@ -97,7 +112,9 @@ pub use evaluation::{TargetAuc, evaluate_prior, roc_auc};
 pub use hm3d::{Hm3dRegion, Hm3dStats, METADATA_FILE, REGIONS_FILE, Split};
 pub use label::{OBJECTNAV_CATEGORIES, STRUCTURAL_LABELS, normalize_label};
 #[cfg(feature = "llm")]
-pub use llm::{LlmConfig, LlmPolicy};
+#[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
+pub use llm::LlmPolicy;
+pub use llm_config::LlmConfig;
 pub use policy::{ContextPolicy, NeverRelocate, PolicyAction, PolicyDecision, Situation};
 pub use prior::{
     ATTRIBUTION, CooccurrencePrior, MP3D_EXTRA_TARGETS, Posterior, PriorBuildConfig, TargetRow,

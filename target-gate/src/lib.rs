@@ -15,6 +15,15 @@
 //! platform reached the candidate, turned toward it and a fresh observation
 //! still shows it). Defaults: `N_min = 10`, `N_obs = 3`, `N_miss = 5`.
 //!
+//! # Should I use this crate?
+//! Use it when an object detector (any: semantic segmentation, an
+//! open-vocabulary model, LiDAR labels) feeds object clusters to a robot that
+//! must not stop on a single false positive: it accumulates evidence per
+//! candidate, survives cluster merges and splits, and only confirms after the
+//! robot has driven up to the candidate and seen it again. It is standalone
+//! (nalgebra and serde only) and leaves detection, mapping and motion to you.
+//! If your task ends at the first detection, you do not need it.
+//!
 //! # API themes
 //! * [`Evidence`] and [`success`]: the two recursions and the success
 //!   condition, exactly.
@@ -63,6 +72,7 @@
 //! assert!(matches!(gate.command(), GateCommand::Stop { object: ObjectId(7), .. }));
 //! ```
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.

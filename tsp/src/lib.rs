@@ -50,6 +50,7 @@
 //! crate README for the table) the solver matches LKH run with FUEL's
 //! settings in a fraction of its time.
 #![forbid(unsafe_code)]
+#![cfg_attr(docsrs, feature(doc_cfg))]
 #![deny(missing_docs)]
 
 /// The README's example is compiled and run as a doctest.

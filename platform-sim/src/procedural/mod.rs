@@ -77,6 +77,7 @@ pub mod furniture;
 pub mod stats;
 
 use nalgebra::{Point2, Point3};
+use petgraph::unionfind::UnionFind;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
@@ -549,14 +550,6 @@ fn shuffle<T>(rng: &mut ChaCha8Rng, v: &mut [T]) {
     }
 }
 
-fn find(p: &mut [usize], mut i: usize) -> usize {
-    while p[i] != i {
-        p[i] = p[p[i]];
-        i = p[i];
-    }
-    i
-}
-
 fn weighted_pick<T: Copy>(rng: &mut ChaCha8Rng, items: &[(T, f64)]) -> Option<T> {
     let total: f64 = items.iter().map(|i| i.1).sum();
     if total <= 0.0 {
@@ -865,6 +858,315 @@ fn rooms_per_floor(n: usize, floors: usize) -> Vec<usize> {
     counts
 }
 
+/// The mesh of floor `f`: a floor slab per room (upstairs the stairwell
+/// core has a slab only at its landing end, `south_end` or north), ceilings
+/// on the top floor (`top`), and the walls with their door openings.
+/// Returns the floor's [`Level`] and its named [`Room`]s.
+fn floor_geometry(
+    b: &mut MeshBuilder,
+    f: usize,
+    rooms: &[FloorRoom],
+    openings: &[Opening],
+    (top, south_end): (bool, bool),
+    g: &StairGeom,
+    config: &ProceduralConfig,
+) -> (Level, Vec<Room>) {
+    let mut rooms_out = Vec::with_capacity(rooms.len());
+    let z = f as f64 * g.level_h;
+    let level = Level {
+        name: if f == 0 {
+            "Ground floor".into()
+        } else {
+            format!("Floor {f}")
+        },
+        elevation: z,
+        height: config.wall_height,
+        floor_thickness: config.floor_thickness,
+    };
+    for (ri, r) in rooms.iter().enumerate() {
+        let name = if r.stair && f == 0 {
+            STAIRWELL.to_string()
+        } else if r.stair || r.landing {
+            STAIRWELL_LANDING.to_string()
+        } else {
+            format!("{} {}", r.room_type.label(), ri)
+        };
+        rooms_out.push(Room {
+            name: name.clone(),
+            room_type: r.room_type,
+            level: f,
+            polygon: r.rect.polygon(),
+            floor_z: z,
+        });
+        // upstairs the core has a floor only at its landing end (the
+        // rest is the stairwell's void)
+        let slab = if r.stair && f > 0 {
+            g.end_rect(south_end)
+        } else {
+            r.rect
+        };
+        let fl = b.add_instance(InstanceKind::Floor, "floor", &name, f);
+        b.aabb_box(
+            Point3::new(slab.x0, slab.y0, z - config.floor_thickness),
+            Point3::new(slab.x1, slab.y1, z),
+            fl,
+        );
+        if top {
+            let c = b.add_instance(InstanceKind::Ceiling, "ceiling", &name, f);
+            b.horizontal_polygon(&r.rect.polygon(), z + config.wall_height, false, c);
+        }
+    }
+    build_walls(b, rooms, openings, f, z, config);
+    (level, rooms_out)
+}
+
+/// Where one floor's rooms go: the house outline and, with stairs, the
+/// stairwell core.
+#[derive(Debug, Clone, Copy)]
+struct FloorOutline {
+    /// Floor index (0: ground floor).
+    floor: usize,
+    /// Whether the house has stairs (a core on every floor).
+    stairwell: bool,
+    /// The stairwell core.
+    core: Rect,
+    /// House width (x), metres.
+    width: f64,
+    /// House depth (y), metres.
+    depth: f64,
+}
+
+/// The rooms of one floor: the stairwell core and, upstairs, its landing
+/// strip; the rest of the outline split into areas, the floor's room types
+/// dealt to the areas in proportion to their area, and each area split
+/// recursively into rooms ([`split_rooms`]).
+fn floor_rooms(
+    rng: &mut ChaCha8Rng,
+    outline: &FloorOutline,
+    floor_types: &[RoomType],
+    g: &StairGeom,
+    config: &ProceduralConfig,
+) -> Vec<FloorRoom> {
+    let FloorOutline {
+        floor: f,
+        stairwell,
+        core,
+        width: w,
+        depth: d,
+    } = *outline;
+    let mut rooms = Vec::new();
+    let areas: Vec<Rect> = if stairwell {
+        rooms.push(FloorRoom {
+            rect: core,
+            room_type: if f == 0 {
+                RoomType::Stairs
+            } else {
+                RoomType::Hallway
+            },
+            stair: true,
+            landing: false,
+        });
+        if f == 0 {
+            // ground floor: a strip across the whole house above the
+            // core and the area beside it
+            vec![
+                Rect {
+                    x0: 0.0,
+                    y0: g.sd,
+                    x1: w,
+                    y1: d,
+                },
+                Rect {
+                    x0: g.cw,
+                    y0: 0.0,
+                    x1: w,
+                    y1: g.sd,
+                },
+            ]
+        } else {
+            // upper floors: a landing strip beyond the core's north end
+            rooms.push(FloorRoom {
+                rect: Rect {
+                    x0: 0.0,
+                    y0: g.sd,
+                    x1: g.cw,
+                    y1: d,
+                },
+                room_type: RoomType::Hallway,
+                stair: false,
+                landing: true,
+            });
+            vec![Rect {
+                x0: g.cw,
+                y0: 0.0,
+                x1: w,
+                y1: d,
+            }]
+        }
+    } else {
+        vec![Rect {
+            x0: 0.0,
+            y0: 0.0,
+            x1: w,
+            y1: d,
+        }]
+    };
+    // deal the floor's types to its areas in proportion to their area
+    // (each type to the area furthest below its share; every area gets one)
+    let total_area: f64 = areas.iter().map(Rect::area).sum();
+    let w_total: f64 = floor_types.iter().map(|&t| area_weight(t)).sum();
+    let want: Vec<f64> = areas
+        .iter()
+        .map(|a| w_total * a.area() / total_area)
+        .collect();
+    let mut groups: Vec<Vec<RoomType>> = vec![Vec::new(); areas.len()];
+    let mut got = vec![0.0; areas.len()];
+    for (i, &t) in floor_types.iter().enumerate() {
+        let empty: Vec<usize> = (0..areas.len()).filter(|&k| groups[k].is_empty()).collect();
+        let k = if floor_types.len() - i <= empty.len() {
+            empty[0]
+        } else {
+            (0..areas.len())
+                .max_by(|&a, &b| (want[a] - got[a]).total_cmp(&(want[b] - got[b])))
+                .unwrap_or(0)
+        };
+        groups[k].push(t);
+        got[k] += area_weight(t);
+    }
+    for (a, group) in areas.iter().zip(&groups) {
+        let mut leaves = Vec::new();
+        split_rooms(rng, *a, group, config.min_room_side, &mut leaves);
+        for (rect, room_type) in leaves {
+            rooms.push(FloorRoom {
+                rect,
+                room_type,
+                stair: false,
+                landing: false,
+            });
+        }
+    }
+    rooms
+}
+
+/// The doors of one floor: a candidate opening (random position) on every
+/// wall two rooms share (the stairwell core only beside its landing, `south`
+/// or north), then a random spanning tree over them plus extras with
+/// probability [`EXTRA_DOOR_PROBABILITY`], then narrower doors on the
+/// longest shared wall between rooms still cut off, until every room is
+/// connected or no wall is left.
+fn floor_openings(
+    rng: &mut ChaCha8Rng,
+    rooms: &[FloorRoom],
+    south: bool,
+    g: &StairGeom,
+    config: &ProceduralConfig,
+) -> Vec<Opening> {
+    let t = config.wall_thickness;
+    let mut cands: Vec<Opening> = Vec::new();
+    let mut forced: Vec<Opening> = Vec::new();
+    for i in 0..rooms.len() {
+        for j in i + 1..rooms.len() {
+            let Some(mut s) = shared(&rooms[i].rect, &rooms[j].rect) else {
+                continue;
+            };
+            let (a, b) = (&rooms[i], &rooms[j]);
+            if (a.stair && b.landing) || (a.landing && b.stair) {
+                // the landing strip opens onto a north landing
+                if !south {
+                    forced.push(Opening {
+                        seg: s,
+                        open: true,
+                        rooms: (i, j),
+                    });
+                }
+                continue;
+            }
+            if a.stair || b.stair {
+                // the core opens only beside its landing on this floor
+                // (the rest of its side is a void or a flight)
+                if s.axis != 1 {
+                    continue;
+                }
+                if south {
+                    s.hi = s.hi.min(g.end);
+                } else {
+                    s.lo = s.lo.max(g.sd - g.end);
+                }
+            }
+            let margin = 0.05 + t * 0.5;
+            if s.hi - s.lo < config.door_width + 2.0 * margin {
+                continue;
+            }
+            let free = s.hi - s.lo - config.door_width - 2.0 * margin;
+            let lo = s.lo + margin + rng.random::<f64>() * free;
+            cands.push(Opening {
+                seg: Shared {
+                    lo,
+                    hi: lo + config.door_width,
+                    ..s
+                },
+                open: false,
+                rooms: (i, j),
+            });
+        }
+    }
+    // random spanning tree + extras
+    let mut sets = UnionFind::<usize>::new(rooms.len());
+    let mut chosen = forced.clone();
+    for o in &forced {
+        sets.union(o.rooms.0, o.rooms.1);
+    }
+    let mut order: Vec<usize> = (0..cands.len()).collect();
+    shuffle(rng, &mut order);
+    for &k in &order {
+        let o = cands[k];
+        // a tree edge, or (drawn only then) an extra door
+        if sets.union(o.rooms.0, o.rooms.1) || rng.random::<f64>() < EXTRA_DOOR_PROBABILITY {
+            chosen.push(o);
+        }
+    }
+    // rooms still cut off (only short shared walls): narrower doors on
+    // the longest shared wall between components
+    loop {
+        let mut best: Option<(f64, Opening)> = None;
+        for i in 0..rooms.len() {
+            for j in i + 1..rooms.len() {
+                if sets.equiv(i, j) {
+                    continue;
+                }
+                let (a, b) = (&rooms[i], &rooms[j]);
+                if a.stair || b.stair || (a.landing && b.landing) {
+                    continue;
+                }
+                let Some(s) = shared(&a.rect, &b.rect) else {
+                    continue;
+                };
+                let len = s.hi - s.lo - t - 0.04;
+                if len >= 0.75 && best.is_none_or(|(l, _)| len > l) {
+                    let w = len.min(config.door_width);
+                    let lo = 0.5 * (s.lo + s.hi) - 0.5 * w;
+                    best = Some((
+                        len,
+                        Opening {
+                            seg: Shared {
+                                lo,
+                                hi: lo + w,
+                                ..s
+                            },
+                            open: false,
+                            rooms: (i, j),
+                        },
+                    ));
+                }
+            }
+        }
+        let Some((_, o)) = best else { break };
+        sets.union(o.rooms.0, o.rooms.1);
+        chosen.push(o);
+    }
+    chosen
+}
+
 /// [`generate`] with explicit statistics.
 ///
 /// # Errors
@@ -968,267 +1270,38 @@ pub fn generate_with_stats(
         x1: g.cw,
         y1: g.sd,
     };
-    let mut plan: Vec<Vec<FloorRoom>> = Vec::new();
-    for (f, floor_types) in by_floor.into_iter().enumerate() {
-        let mut rooms = Vec::new();
-        let areas: Vec<Rect> = if stairwell {
-            rooms.push(FloorRoom {
-                rect: core,
-                room_type: if f == 0 {
-                    RoomType::Stairs
-                } else {
-                    RoomType::Hallway
-                },
-                stair: true,
-                landing: false,
-            });
-            if f == 0 {
-                // ground floor: a strip across the whole house above the
-                // core and the area beside it
-                vec![
-                    Rect {
-                        x0: 0.0,
-                        y0: g.sd,
-                        x1: w,
-                        y1: d,
-                    },
-                    Rect {
-                        x0: g.cw,
-                        y0: 0.0,
-                        x1: w,
-                        y1: g.sd,
-                    },
-                ]
-            } else {
-                // upper floors: a landing strip beyond the core's north end
-                rooms.push(FloorRoom {
-                    rect: Rect {
-                        x0: 0.0,
-                        y0: g.sd,
-                        x1: g.cw,
-                        y1: d,
-                    },
-                    room_type: RoomType::Hallway,
-                    stair: false,
-                    landing: true,
-                });
-                vec![Rect {
-                    x0: g.cw,
-                    y0: 0.0,
-                    x1: w,
-                    y1: d,
-                }]
-            }
-        } else {
-            vec![Rect {
-                x0: 0.0,
-                y0: 0.0,
-                x1: w,
-                y1: d,
-            }]
-        };
-        // deal the floor's types to its areas in proportion to their area
-        // (each type to the area furthest below its share; every area gets one)
-        let total_area: f64 = areas.iter().map(Rect::area).sum();
-        let w_total: f64 = floor_types.iter().map(|&t| area_weight(t)).sum();
-        let want: Vec<f64> = areas
-            .iter()
-            .map(|a| w_total * a.area() / total_area)
-            .collect();
-        let mut groups: Vec<Vec<RoomType>> = vec![Vec::new(); areas.len()];
-        let mut got = vec![0.0; areas.len()];
-        for (i, &t) in floor_types.iter().enumerate() {
-            let empty: Vec<usize> = (0..areas.len()).filter(|&k| groups[k].is_empty()).collect();
-            let k = if floor_types.len() - i <= empty.len() {
-                empty[0]
-            } else {
-                (0..areas.len())
-                    .max_by(|&a, &b| (want[a] - got[a]).total_cmp(&(want[b] - got[b])))
-                    .unwrap_or(0)
+    let plan: Vec<Vec<FloorRoom>> = by_floor
+        .into_iter()
+        .enumerate()
+        .map(|(f, floor_types)| {
+            let outline = FloorOutline {
+                floor: f,
+                stairwell,
+                core,
+                width: w,
+                depth: d,
             };
-            groups[k].push(t);
-            got[k] += area_weight(t);
-        }
-        for (a, group) in areas.iter().zip(&groups) {
-            let mut leaves = Vec::new();
-            split_rooms(&mut rng, *a, group, config.min_room_side, &mut leaves);
-            for (rect, room_type) in leaves {
-                rooms.push(FloorRoom {
-                    rect,
-                    room_type,
-                    stair: false,
-                    landing: false,
-                });
-            }
-        }
-        plan.push(rooms);
-    }
+            floor_rooms(&mut rng, &outline, &floor_types, &g, config)
+        })
+        .collect();
 
     // doors
-    let mut openings: Vec<Vec<Opening>> = Vec::new();
-    for (f, rooms) in plan.iter().enumerate() {
-        let south = ends[f];
-        let mut cands: Vec<Opening> = Vec::new();
-        let mut forced: Vec<Opening> = Vec::new();
-        for i in 0..rooms.len() {
-            for j in i + 1..rooms.len() {
-                let Some(mut s) = shared(&rooms[i].rect, &rooms[j].rect) else {
-                    continue;
-                };
-                let (a, b) = (&rooms[i], &rooms[j]);
-                if (a.stair && b.landing) || (a.landing && b.stair) {
-                    // the landing strip opens onto a north landing
-                    if !south {
-                        forced.push(Opening {
-                            seg: s,
-                            open: true,
-                            rooms: (i, j),
-                        });
-                    }
-                    continue;
-                }
-                if a.stair || b.stair {
-                    // the core opens only beside its landing on this floor
-                    // (the rest of its side is a void or a flight)
-                    if s.axis != 1 {
-                        continue;
-                    }
-                    if south {
-                        s.hi = s.hi.min(g.end);
-                    } else {
-                        s.lo = s.lo.max(g.sd - g.end);
-                    }
-                }
-                let margin = 0.05 + t * 0.5;
-                if s.hi - s.lo < config.door_width + 2.0 * margin {
-                    continue;
-                }
-                let free = s.hi - s.lo - config.door_width - 2.0 * margin;
-                let lo = s.lo + margin + rng.random::<f64>() * free;
-                cands.push(Opening {
-                    seg: Shared {
-                        lo,
-                        hi: lo + config.door_width,
-                        ..s
-                    },
-                    open: false,
-                    rooms: (i, j),
-                });
-            }
-        }
-        // random spanning tree + extras
-        let mut parent: Vec<usize> = (0..rooms.len()).collect();
-        let mut chosen = forced.clone();
-        for o in &forced {
-            let (a, b) = (find(&mut parent, o.rooms.0), find(&mut parent, o.rooms.1));
-            parent[a] = b;
-        }
-        let mut order: Vec<usize> = (0..cands.len()).collect();
-        shuffle(&mut rng, &mut order);
-        for &k in &order {
-            let o = cands[k];
-            let (a, b) = (find(&mut parent, o.rooms.0), find(&mut parent, o.rooms.1));
-            if a != b {
-                parent[a] = b;
-                chosen.push(o);
-            } else if rng.random::<f64>() < EXTRA_DOOR_PROBABILITY {
-                chosen.push(o);
-            }
-        }
-        // rooms still cut off (only short shared walls): narrower doors on
-        // the longest shared wall between components
-        loop {
-            let mut best: Option<(f64, Opening)> = None;
-            for i in 0..rooms.len() {
-                for j in i + 1..rooms.len() {
-                    if find(&mut parent, i) == find(&mut parent, j) {
-                        continue;
-                    }
-                    let (a, b) = (&rooms[i], &rooms[j]);
-                    if a.stair || b.stair || (a.landing && b.landing) {
-                        continue;
-                    }
-                    let Some(s) = shared(&a.rect, &b.rect) else {
-                        continue;
-                    };
-                    let len = s.hi - s.lo - t - 0.04;
-                    if len >= 0.75 && best.is_none_or(|(l, _)| len > l) {
-                        let w = len.min(config.door_width);
-                        let lo = 0.5 * (s.lo + s.hi) - 0.5 * w;
-                        best = Some((
-                            len,
-                            Opening {
-                                seg: Shared {
-                                    lo,
-                                    hi: lo + w,
-                                    ..s
-                                },
-                                open: false,
-                                rooms: (i, j),
-                            },
-                        ));
-                    }
-                }
-            }
-            let Some((_, o)) = best else { break };
-            let (a, b) = (find(&mut parent, o.rooms.0), find(&mut parent, o.rooms.1));
-            parent[a] = b;
-            chosen.push(o);
-        }
-        openings.push(chosen);
-    }
+    let openings: Vec<Vec<Opening>> = plan
+        .iter()
+        .enumerate()
+        .map(|(f, rooms)| floor_openings(&mut rng, rooms, ends[f], &g, config))
+        .collect();
 
     // geometry
     let mut b = MeshBuilder::new();
     let mut levels = Vec::new();
     let mut rooms_out = Vec::new();
     for (f, rooms) in plan.iter().enumerate() {
-        let z = f as f64 * level_h;
-        levels.push(Level {
-            name: if f == 0 {
-                "Ground floor".into()
-            } else {
-                format!("Floor {f}")
-            },
-            elevation: z,
-            height: config.wall_height,
-            floor_thickness: config.floor_thickness,
-        });
         let top = f + 1 == floors;
-        for (ri, r) in rooms.iter().enumerate() {
-            let name = if r.stair && f == 0 {
-                STAIRWELL.to_string()
-            } else if r.stair || r.landing {
-                STAIRWELL_LANDING.to_string()
-            } else {
-                format!("{} {}", r.room_type.label(), ri)
-            };
-            rooms_out.push(Room {
-                name: name.clone(),
-                room_type: r.room_type,
-                level: f,
-                polygon: r.rect.polygon(),
-                floor_z: z,
-            });
-            // upstairs the core has a floor only at its landing end (the
-            // rest is the stairwell's void)
-            let slab = if r.stair && f > 0 {
-                g.end_rect(ends[f])
-            } else {
-                r.rect
-            };
-            let fl = b.add_instance(InstanceKind::Floor, "floor", &name, f);
-            b.aabb_box(
-                Point3::new(slab.x0, slab.y0, z - config.floor_thickness),
-                Point3::new(slab.x1, slab.y1, z),
-                fl,
-            );
-            if top {
-                let c = b.add_instance(InstanceKind::Ceiling, "ceiling", &name, f);
-                b.horizontal_polygon(&r.rect.polygon(), z + config.wall_height, false, c);
-            }
-        }
-        build_walls(&mut b, rooms, &openings[f], f, z, config);
+        let (level, floor_rooms_out) =
+            floor_geometry(&mut b, f, rooms, &openings[f], (top, ends[f]), &g, config);
+        levels.push(level);
+        rooms_out.extend(floor_rooms_out);
     }
     for (f, m) in stairs.iter().enumerate() {
         let name = if f == 0 {
@@ -1263,141 +1336,184 @@ pub fn generate_with_stats(
         shuffle(&mut rng, &mut lists);
     }
     for ((f, ri, rect), list) in furnished.into_iter().zip(lists) {
-        let z = f as f64 * level_h;
-        let mut room = RoomFurniture::default();
-        for o in &openings[f] {
-            if o.rooms.0 != ri && o.rooms.1 != ri {
-                continue;
-            }
-            let s = o.seg;
-            let depth = DOOR_CLEARANCE;
-            room.keep_out.push(if s.axis == 0 {
-                Rect {
-                    x0: s.lo - 0.2,
-                    x1: s.hi + 0.2,
-                    y0: s.c - depth,
-                    y1: s.c + depth,
-                }
-            } else {
-                Rect {
-                    y0: s.lo - 0.2,
-                    y1: s.hi + 0.2,
-                    x0: s.c - depth,
-                    x1: s.c + depth,
-                }
-            });
-        }
-        let inner = rect.inflate(-(t * 0.5 + 0.01));
-        // points just inside each doorway of this room
-        let door_points: Vec<Point2<f64>> = openings[f]
-            .iter()
-            .filter(|o| o.rooms.0 == ri || o.rooms.1 == ri)
-            .map(|o| {
-                let (s, mid) = (o.seg, 0.5 * (o.seg.lo + o.seg.hi));
-                if s.axis == 0 {
-                    let dy = if (rect.y0 - s.c).abs() < 1e-6 {
-                        0.4
-                    } else {
-                        -0.4
-                    };
-                    Point2::new(mid, s.c + dy)
-                } else {
-                    let dx = if (rect.x0 - s.c).abs() < 1e-6 {
-                        0.4
-                    } else {
-                        -0.4
-                    };
-                    Point2::new(s.c + dx, mid)
-                }
-            })
-            .collect();
-        let mut used_area = 0.0;
-        // placement order: first instances of every category before second
-        // ones; within a round floor pieces before wall-mounted ones, large
-        // pieces (over 0.8 m^2) before small ones, each by decreasing HM3D
-        // presence. A later floor piece may not cut a mounted one off the
-        // free floor (`room_stays_open`) nor stand tall in front of it.
-        let mut items: Vec<(Drawn, u32)> = list
-            .iter()
-            .flat_map(|&d| (0..d.count).map(move |k| (d, k)))
-            .collect();
-        items.sort_by(|(a, ka), (b, kb)| {
-            let mounted_a = a.shape.placement == Placement::Mounted;
-            let mounted_b = b.shape.placement == Placement::Mounted;
-            let area = |d: &Drawn| d.shape.width.1 * d.shape.depth.1;
-            ka.cmp(kb)
-                .then(mounted_a.cmp(&mounted_b))
-                .then((area(b) > 0.8).cmp(&(area(a) > 0.8)))
-                .then(b.presence.total_cmp(&a.presence))
-                .then(area(b).total_cmp(&area(a)))
-        });
-        for (drawn, k) in items {
-            let sh = drawn.shape;
-            let size = (
-                rng.random_range(sh.width.0..=sh.width.1),
-                rng.random_range(sh.depth.0..=sh.depth.1),
-                rng.random_range(sh.height.0..=sh.height.1),
-            );
-            let mounted = sh.placement == Placement::Mounted;
-            // the floor-space budget limits extra instances only, so that
-            // presence follows the statistics even in small rooms
-            if !mounted && k > 0 && used_area + size.0 * size.1 > MAX_FURNISHED_SHARE * rect.area()
-            {
-                continue;
-            }
-            // `room.placed` does not change while this piece is placed
-            let viewable = mounted.then(|| viewable(&inner, &room.placed, &door_points));
-            let accept = |c: &Candidate| {
-                if let Some(viewable) = &viewable {
-                    viewable(&c.foot)
-                } else {
-                    let mut trial = room.placed.clone();
-                    trial.push(c.foot);
-                    room_stays_open(&inner, &trial, &door_points, &room.mounted)
-                }
-            };
-            let Some(Candidate {
-                centre: at,
-                yaw,
-                foot,
-                clear,
-                ..
-            }) = place(
-                &mut rng,
-                sh.category,
-                sh.placement,
-                (size.0, size.1),
-                size.2 > MOUNT_HEIGHT - 0.1,
-                &inner,
-                &room,
-                accept,
-            )
-            else {
-                continue;
-            };
-            let inst = b.add_instance(
-                InstanceKind::Object,
-                sh.category,
-                &format!("{} {}", sh.category, k + 1),
-                f,
-            );
-            let at = Point3::new(at.x, at.y, z + if mounted { MOUNT_HEIGHT } else { 0.0 });
-            furniture::build(&mut b, inst, sh.category, size, at, yaw);
-            if mounted {
-                room.mounted.push(foot);
-                room.mounted_clears.push(clear);
-            } else {
-                used_area += size.0 * size.1;
-                room.placed.push(foot);
-                room.tall.push(size.2 > MOUNT_HEIGHT - 0.1);
-                room.clears.push(clear);
-                room.categories.push(sh.category);
-                room.against_wall.push(sh.placement == Placement::Wall);
-            }
-        }
+        let room = PlacedRoom {
+            floor: f,
+            index: ri,
+            rect,
+            z: f as f64 * level_h,
+        };
+        furnish_room(&mut rng, &mut b, &room, &list, &openings[f], t);
     }
     let desc = b.finish(&format!("procedural-{seed}"), levels, rooms_out);
     Scene::from_description(desc)
+}
+
+/// Room `index` of floor `floor` as placed in the house: its outline and
+/// floor height.
+#[derive(Debug, Clone, Copy)]
+struct PlacedRoom {
+    /// Floor index.
+    floor: usize,
+    /// Index of the room on its floor (as in the floor's openings).
+    index: usize,
+    /// Outline (wall centre lines).
+    rect: Rect,
+    /// Floor height, metres.
+    z: f64,
+}
+
+/// Places one room's drawn objects (`list`): keep-out zones in front of its
+/// doors (`openings` of its floor), then every instance in placement order
+/// (first instances of every category before second ones; floor pieces
+/// before wall-mounted ones, large before small, by decreasing HM3D
+/// presence), each at a sampled position that keeps the room open
+/// ([`room_stays_open`]) or, mounted, viewable, within the floor-space
+/// budget [`MAX_FURNISHED_SHARE`] for extra instances. `t` is the wall
+/// thickness.
+fn furnish_room(
+    rng: &mut ChaCha8Rng,
+    b: &mut MeshBuilder,
+    placed: &PlacedRoom,
+    list: &[Drawn],
+    openings: &[Opening],
+    t: f64,
+) {
+    let PlacedRoom {
+        floor: f,
+        index: ri,
+        rect,
+        z,
+    } = *placed;
+    let mut room = RoomFurniture::default();
+    for o in openings {
+        if o.rooms.0 != ri && o.rooms.1 != ri {
+            continue;
+        }
+        let s = o.seg;
+        let depth = DOOR_CLEARANCE;
+        room.keep_out.push(if s.axis == 0 {
+            Rect {
+                x0: s.lo - 0.2,
+                x1: s.hi + 0.2,
+                y0: s.c - depth,
+                y1: s.c + depth,
+            }
+        } else {
+            Rect {
+                y0: s.lo - 0.2,
+                y1: s.hi + 0.2,
+                x0: s.c - depth,
+                x1: s.c + depth,
+            }
+        });
+    }
+    let inner = rect.inflate(-(t * 0.5 + 0.01));
+    // points just inside each doorway of this room
+    let door_points: Vec<Point2<f64>> = openings
+        .iter()
+        .filter(|o| o.rooms.0 == ri || o.rooms.1 == ri)
+        .map(|o| {
+            let (s, mid) = (o.seg, 0.5 * (o.seg.lo + o.seg.hi));
+            if s.axis == 0 {
+                let dy = if (rect.y0 - s.c).abs() < 1e-6 {
+                    0.4
+                } else {
+                    -0.4
+                };
+                Point2::new(mid, s.c + dy)
+            } else {
+                let dx = if (rect.x0 - s.c).abs() < 1e-6 {
+                    0.4
+                } else {
+                    -0.4
+                };
+                Point2::new(s.c + dx, mid)
+            }
+        })
+        .collect();
+    let mut used_area = 0.0;
+    // placement order: first instances of every category before second
+    // ones; within a round floor pieces before wall-mounted ones, large
+    // pieces (over 0.8 m^2) before small ones, each by decreasing HM3D
+    // presence. A later floor piece may not cut a mounted one off the
+    // free floor (`room_stays_open`) nor stand tall in front of it.
+    let mut items: Vec<(Drawn, u32)> = list
+        .iter()
+        .flat_map(|&d| (0..d.count).map(move |k| (d, k)))
+        .collect();
+    items.sort_by(|(a, ka), (b, kb)| {
+        let mounted_a = a.shape.placement == Placement::Mounted;
+        let mounted_b = b.shape.placement == Placement::Mounted;
+        let area = |d: &Drawn| d.shape.width.1 * d.shape.depth.1;
+        ka.cmp(kb)
+            .then(mounted_a.cmp(&mounted_b))
+            .then((area(b) > 0.8).cmp(&(area(a) > 0.8)))
+            .then(b.presence.total_cmp(&a.presence))
+            .then(area(b).total_cmp(&area(a)))
+    });
+    for (drawn, k) in items {
+        let sh = drawn.shape;
+        let size = (
+            rng.random_range(sh.width.0..=sh.width.1),
+            rng.random_range(sh.depth.0..=sh.depth.1),
+            rng.random_range(sh.height.0..=sh.height.1),
+        );
+        let mounted = sh.placement == Placement::Mounted;
+        // the floor-space budget limits extra instances only, so that
+        // presence follows the statistics even in small rooms
+        if !mounted && k > 0 && used_area + size.0 * size.1 > MAX_FURNISHED_SHARE * rect.area() {
+            continue;
+        }
+        // `room.placed` does not change while this piece is placed
+        let viewable = mounted.then(|| viewable(&inner, &room.placed, &door_points));
+        let accept = |c: &Candidate| {
+            if let Some(viewable) = &viewable {
+                viewable(&c.foot)
+            } else {
+                let mut trial = room.placed.clone();
+                trial.push(c.foot);
+                room_stays_open(&inner, &trial, &door_points, &room.mounted)
+            }
+        };
+        let Some(Candidate {
+            centre: at,
+            yaw,
+            foot,
+            clear,
+            ..
+        }) = place(
+            rng,
+            sh.category,
+            sh.placement,
+            (size.0, size.1),
+            size.2 > MOUNT_HEIGHT - 0.1,
+            &inner,
+            &room,
+            accept,
+        )
+        else {
+            continue;
+        };
+        let inst = b.add_instance(
+            InstanceKind::Object,
+            sh.category,
+            &format!("{} {}", sh.category, k + 1),
+            f,
+        );
+        let at = Point3::new(at.x, at.y, z + if mounted { MOUNT_HEIGHT } else { 0.0 });
+        furniture::build(b, inst, sh.category, size, at, yaw);
+        if mounted {
+            room.mounted.push(foot);
+            room.mounted_clears.push(clear);
+        } else {
+            used_area += size.0 * size.1;
+            room.placed.push(foot);
+            room.tall.push(size.2 > MOUNT_HEIGHT - 0.1);
+            room.clears.push(clear);
+            room.categories.push(sh.category);
+            room.against_wall.push(sh.placement == Placement::Wall);
+        }
+    }
 }
 
 /// Cell size (m) of the free-floor grid of a room ([`free_components`]).

@@ -63,10 +63,65 @@ pub fn one_episode_per_category(sim: &Simulator) -> Vec<Episode> {
     .unwrap()
 }
 
+/// parry3d's triangle mesh of a scene: the independent ray caster the tests
+/// compare the simulator's own BVH and camera against. parry3d is only a
+/// dev-dependency; the library ray-casts with its own [`sornav_platform_sim::Bvh`].
+pub struct ParryMesh {
+    mesh: parry3d::shape::TriMesh,
+    instances: Vec<u32>,
+}
+
+/// A hit of [`ParryMesh::cast_ray`].
+#[derive(Debug, Clone, Copy)]
+pub struct ParryHit {
+    /// Distance along the normalised ray direction, metres.
+    pub distance: f64,
+    /// Instance of the triangle hit.
+    pub instance: u32,
+}
+
+impl ParryMesh {
+    /// Builds parry's mesh (and its BVH) over the scene's triangles.
+    pub fn new(scene: &Scene) -> ParryMesh {
+        let vertices = scene
+            .vertices()
+            .iter()
+            .map(|v| glam::Vec3::from_array(*v))
+            .collect();
+        let mesh = parry3d::shape::TriMesh::new(vertices, scene.triangles().to_vec())
+            .expect("a validated scene is a valid parry mesh");
+        ParryMesh {
+            mesh,
+            instances: scene.triangle_instances().to_vec(),
+        }
+    }
+
+    /// First hit (either face) of the ray from `origin` along `dir` (any
+    /// non-zero length) within `max_distance` metres.
+    pub fn cast_ray(
+        &self,
+        origin: &Point3<f64>,
+        dir: &Vector3<f64>,
+        max_distance: f64,
+    ) -> Option<ParryHit> {
+        let d = dir.try_normalize(0.0)?;
+        let ray = parry3d::query::Ray::new(
+            glam::Vec3::new(origin.x as f32, origin.y as f32, origin.z as f32),
+            glam::Vec3::new(d.x as f32, d.y as f32, d.z as f32),
+        );
+        let (triangle, hit) = parry3d::shape::CompositeShapeRef(&self.mesh)
+            .cast_local_ray_and_get_normal(&ray, max_distance as f32, false)?;
+        Some(ParryHit {
+            distance: f64::from(hit.time_of_impact),
+            instance: self.instances[triangle as usize],
+        })
+    }
+}
+
 /// Whether some ray from `eye` to one of the generator's 27 sample points of
-/// the object's bounds first hits the object (parry's ray cast on the scene,
-/// independent of the generator's BVH).
-pub fn sees(scene: &Scene, eye: &Point3<f64>, object: &ObjectInstance) -> bool {
+/// the object's bounds first hits the object (parry's ray cast on the scene's
+/// mesh, independent of the generator's BVH).
+pub fn sees(mesh: &ParryMesh, eye: &Point3<f64>, object: &ObjectInstance) -> bool {
     let b = object.bounds;
     const F: [f64; 3] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
     F.iter().any(|&i| {
@@ -79,8 +134,7 @@ pub fn sees(scene: &Scene, eye: &Point3<f64>, object: &ObjectInstance) -> bool {
                         (b.max.z - b.min.z) * k,
                     );
                 let d = t - eye;
-                scene
-                    .cast_ray(eye, &d, d.norm() + 1e-3)
+                mesh.cast_ray(eye, &d, d.norm() + 1e-3)
                     .is_some_and(|h| h.instance == object.id)
             })
         })
