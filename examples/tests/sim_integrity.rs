@@ -144,7 +144,20 @@ fn a_locked_output_directory_is_refused_and_a_stopped_run_reports_what_finished(
     // recorded, everything left for a resume, a report all the same
     let mut options = common::options(&dir, 1, None, false);
     options.stop = Some(Arc::new(AtomicBool::new(true)));
-    let stopped = harness::run(&eval(), &options).unwrap();
+    // The lock is an flock on an open file: a child process that another
+    // test of this binary forks at the moment `held` is dropped shares the
+    // open file until it execs (the descriptor is close-on-exec), so the
+    // lock can outlive the drop by that instant. Retry briefly.
+    let mut tries = 0;
+    let stopped = loop {
+        match harness::run(&eval(), &options) {
+            Err(HarnessError::Output(OutputError::Busy { .. })) if tries < 100 => {
+                tries += 1;
+                std::thread::sleep(std::time::Duration::from_millis(20));
+            }
+            other => break other.unwrap(),
+        }
+    };
     assert!(stopped.interrupted);
     assert_eq!((stopped.ran, stopped.not_started), (0, stopped.items));
     assert!(dir.join("summary.json").exists() && dir.join("report.md").exists());
