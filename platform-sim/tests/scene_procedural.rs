@@ -162,6 +162,17 @@ fn shuffled_semantics_changes_room_contents_only() {
     assert!(misplaced[1] > misplaced[0], "{misplaced:?}");
 }
 
+/// A shower stall whose glass sides face the walls: every ray to its box
+/// samples ends in the open stall, so only its surface shows it (CI found
+/// this house).
+#[test]
+fn an_open_stall_is_seen_by_its_surface() {
+    assert_eq!(
+        check_house(10_722_626_021_561_998_075, &ProceduralConfig::default()),
+        Ok(())
+    );
+}
+
 #[test]
 fn bad_config_is_rejected() {
     let cfg = ProceduralConfig {

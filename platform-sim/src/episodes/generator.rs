@@ -10,8 +10,12 @@
 //!    points spread over the object's bounds is reached by an unobstructed ray
 //!    that first hits the object, within the camera's vertical field of view
 //!    of a level camera facing it. The view point faces the object's centre;
-//!    its `iou` is the fraction of sample rays that see the object. Goals
-//!    without view points are dropped, as in Habitat.
+//!    its `iou` is the fraction of sample rays that see the object. An
+//!    object whose box samples all lie in open air seen from every pose (a
+//!    shower stall whose glass sides face the walls: the rays to its inside
+//!    end before they reach anything) is tested instead with points on its
+//!    own surface, the centroids of up to [`SURFACE_SAMPLES`] of its largest
+//!    triangles. Goals without view points are dropped, as in Habitat.
 //! 3. **Starts** are navigable poses drawn uniformly over the walkable area
 //!    of the floor islands (every span has the same area; islands on
 //!    furniture are excluded) connected to a view point over areas at
@@ -131,22 +135,17 @@ pub fn body_distance(object: &ObjectInstance, feet: &Point3<f64>, height: f64) -
 ///
 /// # Complexity
 /// O(C (h + 27 log T)) for C grid candidates around the object, h walking
-/// surfaces per column and T triangles.
+/// surfaces per column and T triangles; when no box sample is seen, another
+/// O(T + C (h + 64 log T)) for the surface samples.
 pub fn goal_view_points(
     sim: &Simulator,
     object: &ObjectInstance,
     config: &GeneratorConfig,
 ) -> Vec<ViewPoint> {
-    let nav = sim.nav();
-    let cam = sim.camera().config();
-    let cam_h = cam.mount_height;
-    let half_vfov = cam.vfov_deg().to_radians() / 2.0;
     let b = &object.bounds;
     if b.is_empty() {
         return Vec::new();
     }
-    let r = config.view_point_radius;
-    let step = config.view_point_spacing;
     // Sample points over the object's bounds.
     let fr = [1.0 / 6.0, 0.5, 5.0 / 6.0];
     let mut targets = Vec::with_capacity(27);
@@ -157,6 +156,66 @@ pub fn goal_view_points(
                 targets.push(b.min + Vector3::new(e.x * fx, e.y * fy, e.z * fz));
             }
         }
+    }
+    let out = view_points_seeing(sim, object, config, &targets);
+    if out.is_empty() {
+        view_points_seeing(sim, object, config, &surface_samples(sim, object))
+    } else {
+        out
+    }
+}
+
+/// Largest number of surface points [`goal_view_points`] tests for an object
+/// that no box sample shows.
+pub const SURFACE_SAMPLES: usize = 64;
+
+/// Centroids of the object's [`SURFACE_SAMPLES`] largest triangles (ties by
+/// triangle index, so deterministic).
+///
+/// # Complexity
+/// O(T + k log k) for T scene triangles and k of the object's.
+fn surface_samples(sim: &Simulator, object: &ObjectInstance) -> Vec<Point3<f64>> {
+    let scene = sim.scene();
+    let v = scene.vertices();
+    let point = |i: u32| {
+        let p = v[i as usize];
+        Point3::new(f64::from(p[0]), f64::from(p[1]), f64::from(p[2]))
+    };
+    let mut tris: Vec<(f64, Point3<f64>)> = scene
+        .triangles()
+        .iter()
+        .zip(scene.triangle_instances())
+        .filter(|(_, id)| **id == object.id)
+        .map(|(t, _)| {
+            let (a, b, c) = (point(t[0]), point(t[1]), point(t[2]));
+            let area = (b - a).cross(&(c - a)).norm();
+            (area, Point3::from((a.coords + b.coords + c.coords) / 3.0))
+        })
+        .filter(|(area, _)| area.is_finite())
+        .collect();
+    // stable: equal areas keep triangle order
+    tris.sort_by(|x, y| y.0.total_cmp(&x.0));
+    tris.truncate(SURFACE_SAMPLES);
+    tris.into_iter().map(|(_, c)| c).collect()
+}
+
+/// Poses on the 0.1 m grid around the object (see the module docs) from
+/// which at least one of `targets` is visible; `iou` is the visible share.
+fn view_points_seeing(
+    sim: &Simulator,
+    object: &ObjectInstance,
+    config: &GeneratorConfig,
+    targets: &[Point3<f64>],
+) -> Vec<ViewPoint> {
+    let nav = sim.nav();
+    let cam = sim.camera().config();
+    let cam_h = cam.mount_height;
+    let half_vfov = cam.vfov_deg().to_radians() / 2.0;
+    let b = &object.bounds;
+    let r = config.view_point_radius;
+    let step = config.view_point_spacing;
+    if targets.is_empty() {
+        return Vec::new();
     }
     let centre = b.center();
     let nx = ((b.max.x - b.min.x + 2.0 * r) / step).floor() as usize + 1;
