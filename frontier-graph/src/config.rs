@@ -276,6 +276,14 @@ pub struct LevelConfig {
     /// chain ends after its first treads. Its open end is then the highest
     /// walkable tread seen; standing there shows the flight.
     pub min_stair_sighting_rise: f64,
+    /// Largest height difference (m) between neighbouring surface columns
+    /// of one stair (default 0.35; never less than the step height). Where
+    /// treads are shallower than a column (steep stairs, winders near their
+    /// narrow end) a column's top is the tread after its riser, so
+    /// neighbouring columns differ by two or three risers though every
+    /// riser is a step. A stair's first tread still has to be within a
+    /// step of the floor, so furniture stays detached from the floor.
+    pub max_stair_column_rise: f64,
     /// Cost (graph units, metres of path) added for climbing one stair
     /// (default 2).
     pub stair_cost_up: f64,
@@ -299,6 +307,7 @@ impl Default for LevelConfig {
             min_level_area: 3.0,
             min_stair_rise: 0.4,
             min_stair_sighting_rise: 0.8,
+            max_stair_column_rise: 0.35,
             stair_cost_up: 2.0,
             stair_cost_down: 1.0,
             portal_radius: 0.8,
@@ -321,6 +330,7 @@ impl LevelConfig {
             self.min_level_area,
             self.min_stair_rise,
             self.min_stair_sighting_rise,
+            self.max_stair_column_rise,
             self.stair_cost_up,
             self.stair_cost_down,
             self.portal_radius,
@@ -342,6 +352,9 @@ impl LevelConfig {
         }
         if self.min_stair_sighting_rise < self.min_stair_rise {
             return bad("min_stair_sighting_rise must be at least min_stair_rise");
+        }
+        if self.max_stair_column_rise > 1.0 {
+            return bad("max_stair_column_rise must be at most 1 m");
         }
         if self.portal_radius > 10.0 {
             return bad("portal_radius must be at most 10 m");

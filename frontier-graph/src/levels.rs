@@ -632,6 +632,7 @@ impl MultiLevelMap {
         #[allow(clippy::cast_possible_truncation)]
         let params = Params {
             step: self.cfg.grid.step_height as f32,
+            column_rise: lc.max_stair_column_rise.max(self.cfg.grid.step_height) as f32,
             clearance: self.clearance(),
             radius: self.cfg.grid.robot_radius,
             level_tolerance: lc.level_tolerance as f32,

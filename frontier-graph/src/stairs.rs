@@ -7,7 +7,11 @@
 //!    are *off-level* (treads, landings, furniture tops, floors of levels
 //!    not yet known).
 //! 2. Two nodes of 8-neighbouring columns are *step-connected* when their
-//!    heights differ by at most the robot's step height; so are two nodes
+//!    heights differ by at most the robot's step height (an off-level node
+//!    and a node on a level) or by at most `max_stair_column_rise` (two
+//!    off-level nodes: a column's top is the highest tread in it, so on a
+//!    stair whose treads are shallower than a column neighbours differ by
+//!    several risers, each a step); so are two nodes
 //!    two columns apart in one of the 8 directions when the column between
 //!    them holds no surface at all (a riser or tread edge the camera did
 //!    not resolve: seen from above at a grazing angle, a stair shows its
@@ -38,7 +42,9 @@
 //!    shows the rest). A
 //!    sheer drop is never step-connected, so it stays an obstacle; furniture
 //!    tops are not attached (their edge is higher than a step).
-//! 5. Inside attached components, a flat area of at least `min_level_area`
+//! 5. Inside attached components, a flat area of walkable nodes (wall
+//!    tops seen from below are lines a column or two wide, never
+//!    walkable) of at least `min_level_area`
 //!    at least `min_level_separation` away from every known floor is a new
 //!    level (the floor at the top or bottom of a stair). Level 0 is where
 //!    the robot started, which may be a stair's half landing: until its
@@ -139,7 +145,11 @@ impl Stair {
 /// Robot and level parameters of an extraction.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Params {
+    /// Step height: a stair's first tread is within it of the floor.
     pub step: f32,
+    /// Largest height difference of step-connected off-level neighbours
+    /// (at least `step`).
+    pub column_rise: f32,
     pub clearance: f32,
     pub radius: f64,
     pub level_tolerance: f32,
@@ -524,7 +534,11 @@ pub(crate) fn extract(
     let mut feet: Vec<Foot> = Vec::new();
     for (i, &(k, z)) in off.iter().enumerate() {
         for (n, z2, kind) in nodes.linked(k) {
-            if (z2 - z).abs() > p.step {
+            let limit = match kind {
+                Kind::Off(_) => p.column_rise,
+                Kind::On(_) => p.step,
+            };
+            if (z2 - z).abs() > limit {
                 continue;
             }
             match kind {
@@ -567,17 +581,27 @@ pub(crate) fn extract(
         let Some(cf) = comp_feet.get(root) else {
             continue;
         };
-        // 5. New levels: flat areas far from every floor.
+        // 3-4. Walkable chain.
+        let walk: FxHashMap<(ColumnKey, u32), usize> = members
+            .iter()
+            .filter(|&&i| supported(off[i].0, off[i].1))
+            .map(|&i| ((off[i].0, off[i].1.to_bits()), i))
+            .collect();
         let mut zs: Vec<f32> = members.iter().map(|&i| off[i].1).collect();
         zs.sort_unstable_by(f32::total_cmp);
+        // 5. New levels: flat walkable areas far from every floor (the
+        // tops of walls seen from below, a network of lines a column or
+        // two wide at the ceiling's height, are never walkable).
+        let mut flat: Vec<f32> = walk.values().map(|&i| off[i].1).collect();
+        flat.sort_unstable_by(f32::total_cmp);
         let mut a = 0;
-        for b in 0..zs.len() {
-            while zs[b] - zs[a] > 2.0 * p.level_tolerance {
+        for b in 0..flat.len() {
+            while flat[b] - flat[a] > 2.0 * p.level_tolerance {
                 a += 1;
             }
             let count = b - a + 1;
             if count as f64 * cell_area >= p.min_level_area {
-                let h = f64::from(zs[(a + b) / 2]);
+                let h = f64::from(flat[(a + b) / 2]);
                 let far = levels.iter().enumerate().all(|(l, z)| {
                     let gap = if l == 0 && !p.first_level_established {
                         p.min_stair_rise
@@ -594,12 +618,6 @@ pub(crate) fn extract(
                 }
             }
         }
-        // 3-4. Walkable chain.
-        let walk: FxHashMap<(ColumnKey, u32), usize> = members
-            .iter()
-            .filter(|&&i| supported(off[i].0, off[i].1))
-            .map(|&i| ((off[i].0, off[i].1.to_bits()), i))
-            .collect();
         if walk.is_empty() {
             continue;
         }
@@ -699,8 +717,11 @@ fn chain(
     let mut heap = BinaryHeap::new();
     let key = |d: f64| Reverse(ordered(d));
     let hs = levels[start];
+    // A foot need not be walkable itself: at column resolution the first
+    // tread beside a door's jambs fails the footprint test though the
+    // robot crosses it in one step (the chain's inner nodes are walkable).
     for &(i, l, col, zf) in feet {
-        if l != start || !walk.contains_key(&(off[i].0, off[i].1.to_bits())) {
+        if l != start {
             continue;
         }
         let d = (node_point(i) - point(map, col, f64::from(zf))).norm();
@@ -731,7 +752,13 @@ fn chain(
             break;
         }
         let rise = (f64::from(off[i].1) - hs) * f64::from(dir);
+        let walkable = walk.contains_key(&(off[i].0, off[i].1.to_bits()));
+        if !walkable {
+            // an unwalkable start foot: only its walkable neighbours go on
+            debug_assert!(parent.get(&i).is_some_and(Result::is_err));
+        }
         if rise > 0.0
+            && walkable
             && best_end
                 .is_none_or(|(b, _)| rise > (f64::from(off[b].1) - hs) * f64::from(dir) + 1e-6)
         {
@@ -740,7 +767,9 @@ fn chain(
         let (k, z) = off[i];
         for (n, z2, kind) in nodes.linked(k) {
             let Kind::Off(j) = kind else { continue };
-            if (z2 - z).abs() > p.step || !walk.contains_key(&(n, z2.to_bits())) {
+            if (z2 - z).abs() > p.column_rise
+                || !(walk.contains_key(&(n, z2.to_bits())) || goal_feet.contains_key(&j))
+            {
                 continue;
             }
             let nd = d + (node_point(j) - node_point(i)).norm();
@@ -837,6 +866,7 @@ mod tests {
     fn params() -> Params {
         Params {
             step: 0.2,
+            column_rise: 0.35,
             clearance: 0.88,
             radius: 0.18,
             level_tolerance: 0.1,
@@ -923,5 +953,93 @@ mod tests {
         let open = s.open_end().expect("a partly seen stair");
         assert!((open.position.z - 0.36).abs() < 1e-4, "{:?}", open.position);
         assert!(side_view(4).stairs.is_empty());
+    }
+
+    /// A steep stair (0.107 m risers, 0.086 m treads: shallower than a
+    /// column, after a first tread a column deep) sampled finely: neighbouring columns differ by up to three
+    /// risers, more than a step, yet the whole flight is one stair with
+    /// `max_stair_column_rise`; with the step height alone the chain breaks
+    /// at the first double riser.
+    #[test]
+    fn a_steep_stair_with_treads_shallower_than_a_column_is_one_stair() {
+        let open_end = |column_rise: f32| {
+            let p = Params {
+                column_rise,
+                ..params()
+            };
+            let mut map = SurfaceMap::new(0.1);
+            let mut points = Vec::new();
+            for kx in 0..30 {
+                for ky in 0..175 {
+                    let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.02 + 0.01);
+                    // a first tread a column deep (a foot needs a column
+                    // within a step of the floor), then steep treads
+                    let z = if (1.0..2.0).contains(&x) && y >= 1.2 {
+                        (((y - 1.2) / 0.086).floor() + 2.0).min(20.0) * 0.107
+                    } else if (1.0..2.0).contains(&x) && y >= 1.0 {
+                        0.107
+                    } else {
+                        0.0
+                    };
+                    points.push(Point3::new(x, y, z));
+                }
+            }
+            map.integrate(&Point3::new(1.5, 0.5, 6.0), &points, 10.0);
+            let mut off = OffLevelColumns::default();
+            let touched = map.take_touched();
+            off.update(&map, &touched, &[0.0], &p);
+            let found = extract(&map, &mut off, &[0.0], &p);
+            found
+                .stairs
+                .iter()
+                .filter_map(|s| s.open_end().map(|e| e.position.z))
+                .fold(0.0, f64::max)
+        };
+        assert!((open_end(0.35) - 2.14).abs() < 1e-4, "{}", open_end(0.35));
+        assert!(open_end(0.2) < 1.0, "{}", open_end(0.2));
+    }
+
+    /// A winding stair entered through a door (the trace of a Sweet Home
+    /// 3D home): its 0.11 m first tread shows only in the two columns
+    /// at the winders' narrow end, beside a jamb, and the columns beside
+    /// them hold two risers (0.22 m, more than a step from the floor). The
+    /// first tread fails the footprint test, yet the stair starts there:
+    /// a foot need not be walkable, the nodes after it must.
+    #[test]
+    fn a_stair_entered_beside_a_door_jamb_starts_at_its_first_tread() {
+        let p = params();
+        let mut map = SurfaceMap::new(0.1);
+        let mut points = Vec::new();
+        for kx in 5..22 {
+            for ky in 0..20 {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                let z = if ky < 10 {
+                    // the floor, and a jamb beside the first tread
+                    if (kx, ky) == (10, 9) { 2.09 } else { 0.0 }
+                } else if kx == 9 || kx == 17 {
+                    2.5 // the stairwell's walls
+                } else if (10..17).contains(&kx) {
+                    let riser = f64::from(ky - 9);
+                    0.11 * (riser + if ky == 10 && kx >= 12 { 1.0 } else { 0.0 })
+                } else {
+                    continue;
+                };
+                points.push(Point3::new(x, y, z));
+            }
+        }
+        map.integrate(&Point3::new(1.3, 0.5, 6.0), &points, 10.0);
+        let mut off = OffLevelColumns::default();
+        let touched = map.take_touched();
+        off.update(&map, &touched, &[0.0], &p);
+        let found = extract(&map, &mut off, &[0.0], &p);
+        assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
+        let s = &found.stairs[0];
+        assert_eq!(s.lower.level, Some(LevelId(0)));
+        // level end on the floor in front of the first tread, then the
+        // first tread (0.11 m), then the flight up to its top (1.1 m)
+        assert!(s.lower.position.z.abs() < 1e-6 && s.lower.position.y < 1.0);
+        assert!((s.path[1].z - 0.11).abs() < 1e-4, "{:?}", s.path);
+        let open = s.open_end().expect("a partly seen stair");
+        assert!((open.position.z - 1.1).abs() < 1e-4, "{:?}", open.position);
     }
 }

@@ -371,12 +371,14 @@ struct RefNode {
 /// definitions of `stairs.rs` (not its union-find and per-component
 /// chains): every surface is a node; a node within `level_tolerance` of a
 /// floor is on that level; two nodes of 8-neighbouring columns are
-/// step-connected when their heights differ by at most the step height;
+/// step-connected when their heights differ by at most the step height
+/// (one on a level) or `max_stair_column_rise` (both off-level);
 /// an off-level node is walkable when every column within the robot radius
 /// has a surface within two step heights of it.
 struct StairReference {
     res: f64,
     step: f32,
+    column_rise: f32,
     floors: Vec<f64>,
     nodes: Vec<RefNode>,
     by_col: HashMap<(i32, i32), Vec<usize>>,
@@ -448,6 +450,7 @@ impl StairReference {
         Self {
             res,
             step,
+            column_rise: cfg.levels.max_stair_column_rise.max(cfg.grid.step_height) as f32,
             floors,
             nodes,
             by_col,
@@ -495,7 +498,16 @@ impl StairReference {
             }
             cols.into_iter()
                 .flat_map(|c| self.by_col.get(&c).into_iter().flatten().copied())
-                .filter(move |&j| (self.nodes[j].z - z).abs() <= self.step)
+                .filter(move |&j| {
+                    // a level's node and an off-level one: a step; two
+                    // off-level ones: a column rise
+                    let limit = if self.nodes[i].level.is_some() || self.nodes[j].level.is_some() {
+                        self.step
+                    } else {
+                        self.column_rise
+                    };
+                    (self.nodes[j].z - z).abs() <= limit
+                })
         })
     }
 
@@ -524,9 +536,11 @@ impl StairReference {
             .map(|&j| f64::from(self.nodes[j].z))
     }
 
-    /// The level columns a walkable off-level node is a foot of.
+    /// The level columns an off-level node is a foot of (walkable or not:
+    /// a chain's first and last nodes need not be walkable, its inner ones
+    /// must).
     fn feet(&self, i: usize) -> Vec<(usize, (i32, i32))> {
-        if !self.nodes[i].walkable {
+        if self.nodes[i].level.is_some() {
             return Vec::new();
         }
         self.steps(i)
@@ -558,8 +572,14 @@ impl StairReference {
                         out.insert(pair);
                     }
                 }
+                // an unwalkable node ends a chain (a foot of another
+                // level) or starts one (a foot of this one)
+                if !self.nodes[i].walkable && !self.feet(i).iter().any(|f| f.0 == a) {
+                    continue;
+                }
                 for j in self.steps(i) {
-                    if self.nodes[j].walkable && !std::mem::replace(&mut seen[j], true) {
+                    let enters = self.nodes[j].walkable || self.feet(j).iter().any(|f| f.0 != a);
+                    if enters && !std::mem::replace(&mut seen[j], true) {
                         queue.push_back(j);
                     }
                 }
@@ -568,9 +588,11 @@ impl StairReference {
         out
     }
 
-    /// Shortest walkable step-path lengths (3-D, column centres) from the
-    /// floor point of `col` on `level` to every walkable node: Dijkstra
-    /// over all nodes.
+    /// Shortest step-path lengths (3-D, column centres) from the floor
+    /// point of `col` on `level` to every node a chain can reach: its first
+    /// node is a foot there, its inner nodes are walkable and an unwalkable
+    /// node off it ends it (a foot of another level). Dijkstra over all
+    /// nodes.
     fn paths_from_end(&self, level: usize, col: (i32, i32)) -> HashMap<usize, f64> {
         let start = self.point(col, self.foot_z(level, col).unwrap_or(self.floors[level]));
         let mut dist: HashMap<usize, f64> = HashMap::new();
@@ -587,8 +609,11 @@ impl StairReference {
             if dist[&i] < d {
                 continue;
             }
+            if !self.nodes[i].walkable && !self.feet(i).contains(&(level, col)) {
+                continue;
+            }
             for j in self.steps(i) {
-                if !self.nodes[j].walkable {
+                if !self.nodes[j].walkable && !self.feet(j).iter().any(|f| f.0 != level) {
                     continue;
                 }
                 let nd = d + (self.node_point(j) - self.node_point(i)).norm();
@@ -669,8 +694,11 @@ proptest! {
                 .map(|p| r.node_at(p))
                 .collect::<Option<Vec<_>>>()
                 .ok_or_else(|| TestCaseError::fail(format!("stair point not a surface; {ctx}")))?;
-            for &i in &ids {
-                prop_assert!(r.nodes[i].walkable, "unwalkable stair node {:?}; {}", r.nodes[i], ctx);
+            // inner nodes are walkable; a node next to a level end need
+            // not be (a first tread beside a door's jambs)
+            for (k, &i) in ids.iter().enumerate() {
+                let beside_end = (k == 0 && lo_end) || (k + 1 == ids.len() && hi_end);
+                prop_assert!(beside_end || r.nodes[i].walkable, "unwalkable stair node {:?}; {}", r.nodes[i], ctx);
             }
             for w in ids.windows(2) {
                 prop_assert!(r.steps(w[0]).any(|j| j == w[1]), "not step-connected {:?}; {}", (r.nodes[w[0]], r.nodes[w[1]]), ctx);
@@ -704,6 +732,7 @@ proptest! {
                 }
                 None => {
                     let open = r.node_at(&far.position).unwrap();
+                    prop_assert!(r.nodes[open].walkable, "unwalkable open end; {}", ctx);
                     let d = dist.get(&open).copied().unwrap_or(f64::INFINITY);
                     prop_assert!((s.length - d).abs() <= 1e-9 * d.max(1.0), "partial stair {} vs reference {}; {}", s.length, d, ctx);
                     let hs = r.floors[sl];
@@ -722,7 +751,7 @@ proptest! {
                         cfg.levels.min_stair_rise
                     };
                     prop_assert!(rise(open) >= min_rise, "open end rises {} < {}; {}", rise(open), min_rise, ctx);
-                    let top = dist.keys().map(|&i| rise(i)).fold(0.0, f64::max);
+                    let top = dist.keys().filter(|&&i| r.nodes[i].walkable).map(|&i| rise(i)).fold(0.0, f64::max);
                     prop_assert!(rise(open) >= top - 1e-6, "open end rises {} < {}; {}", rise(open), top, ctx);
                 }
             }
