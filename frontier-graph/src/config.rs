@@ -277,12 +277,14 @@ pub struct LevelConfig {
     /// walkable tread seen; standing there shows the flight.
     pub min_stair_sighting_rise: f64,
     /// Largest height difference (m) between neighbouring surface columns
-    /// of one stair (default 0.35; never less than the step height). Where
-    /// treads are shallower than a column (steep stairs, winders near their
-    /// narrow end) a column's top is the tread after its riser, so
+    /// inside a flight (default 0.35; never less than the step height).
+    /// Where treads are shallower than a column (steep stairs, winders near
+    /// their narrow end) a column's top is the tread after its riser, so
     /// neighbouring columns differ by two or three risers though every
-    /// riser is a step. A stair's first tread still has to be within a
-    /// step of the floor, so furniture stays detached from the floor.
+    /// riser is a step. Such a jump joins two columns only when the columns
+    /// before and after them rise the same way by at most a step each, and
+    /// a stair's first tread must be within a step of the floor, so
+    /// furniture (a chair seat beside a counter) stays apart.
     pub max_stair_column_rise: f64,
     /// Cost (graph units, metres of path) added for climbing one stair
     /// (default 2).

@@ -7,11 +7,13 @@
 //!    are *off-level* (treads, landings, furniture tops, floors of levels
 //!    not yet known).
 //! 2. Two nodes of 8-neighbouring columns are *step-connected* when their
-//!    heights differ by at most the robot's step height (an off-level node
-//!    and a node on a level) or by at most `max_stair_column_rise` (two
-//!    off-level nodes: a column's top is the highest tread in it, so on a
-//!    stair whose treads are shallower than a column neighbours differ by
-//!    several risers, each a step); so are two nodes
+//!    heights differ by at most the robot's step height, or, both
+//!    off-level, by at most `max_stair_column_rise` *inside a flight*: the
+//!    columns before and after the pair, in the same direction, rise (or
+//!    descend) on by a step at most each (a column's top is the highest
+//!    tread in it, so on a stair whose treads are shallower than a column
+//!    neighbours differ by several risers; a chair seat beside a counter
+//!    has flat neighbours and stays a jump); so are two nodes
 //!    two columns apart in one of the 8 directions when the column between
 //!    them holds no surface at all (a riser or tread edge the camera did
 //!    not resolve: seen from above at a grazing angle, a stair shows its
@@ -482,6 +484,38 @@ impl Nodes<'_> {
         })
     }
 
+    /// Whether node `(k, z)` and its neighbour `(n, z2)` (`kind` is the
+    /// neighbour's) are step-connected: within a step, or, both off-level
+    /// in neighbouring columns, within `column_rise` in the middle of a
+    /// flight, where the columns before and after them rise (or descend)
+    /// in the same direction by at most a step each. Columns whose treads
+    /// are shallower than a column differ by several risers on a steep
+    /// stair; a chair seat beside a counter, or a footstool beside a chair,
+    /// has flat neighbours and stays a jump. Symmetric in the two nodes.
+    fn step_connected(&self, k: ColumnKey, z: f32, n: ColumnKey, z2: f32, kind: Kind) -> bool {
+        let p = self.p;
+        let jump = z2 - z;
+        if jump.abs() <= p.step {
+            return true;
+        }
+        let d = (n.0 - k.0, n.1 - k.1);
+        if matches!(kind, Kind::On(_))
+            || jump.abs() > p.column_rise
+            || d.0.abs() > 1
+            || d.1.abs() > 1
+        {
+            return false;
+        }
+        let min_rise = 0.5 * p.level_tolerance;
+        let rises = |a: f32, b: f32| {
+            let r = (b - a) * jump.signum();
+            r >= min_rise && r <= p.step
+        };
+        let before = self.table.surfaces((k.0 - d.0, k.1 - d.1));
+        let after = self.table.surfaces((n.0 + d.0, n.1 + d.1));
+        before.iter().any(|&zb| rises(zb, z)) && after.iter().any(|&za| rises(z2, za))
+    }
+
     /// The node of surface `z` of column `k`.
     fn kind(&self, k: ColumnKey, z: f32) -> Option<Kind> {
         match level_of(z, self.levels, self.p.level_tolerance) {
@@ -534,11 +568,7 @@ pub(crate) fn extract(
     let mut feet: Vec<Foot> = Vec::new();
     for (i, &(k, z)) in off.iter().enumerate() {
         for (n, z2, kind) in nodes.linked(k) {
-            let limit = match kind {
-                Kind::Off(_) => p.column_rise,
-                Kind::On(_) => p.step,
-            };
-            if (z2 - z).abs() > limit {
+            if !nodes.step_connected(k, z, n, z2, kind) {
                 continue;
             }
             match kind {
@@ -650,7 +680,7 @@ pub(crate) fn extract(
                 p.min_stair_rise
             };
             chain(
-                &off, &walk, &nodes, cf, levels, start, goal, dir, map, p, min_rise,
+                &off, &walk, &nodes, cf, levels, start, goal, dir, map, min_rise,
             )
         };
         for w in attached.windows(2) {
@@ -706,7 +736,6 @@ fn chain(
     goal: Option<usize>,
     dir: f32,
     map: &SurfaceMap,
-    p: &Params,
     min_rise: f64,
 ) -> Option<Stair> {
     let node_point = |i: usize| point(map, off[i].0, f64::from(off[i].1));
@@ -767,7 +796,7 @@ fn chain(
         let (k, z) = off[i];
         for (n, z2, kind) in nodes.linked(k) {
             let Kind::Off(j) = kind else { continue };
-            if (z2 - z).abs() > p.column_rise
+            if !nodes.step_connected(k, z, n, z2, kind)
                 || !(walk.contains_key(&(n, z2.to_bits())) || goal_feet.contains_key(&j))
             {
                 continue;
@@ -1041,5 +1070,40 @@ mod tests {
         assert!((s.path[1].z - 0.11).abs() < 1e-4, "{:?}", s.path);
         let open = s.open_end().expect("a partly seen stair");
         assert!((open.position.z - 1.1).abs() < 1e-4, "{:?}", open.position);
+    }
+
+    /// Furniture beside furniture (the trace of a Sweet Home 3D kitchen): a
+    /// footstool (0.17 m), a chair seat (0.46 m) and a counter (0.74 m),
+    /// each flat and wide, rise by less than `max_stair_column_rise` from
+    /// one to the next, but not inside a flight: the columns before and
+    /// after each jump are flat. They are not a stair.
+    #[test]
+    fn furniture_tops_rising_beside_each_other_are_not_a_stair() {
+        let p = params();
+        let mut map = SurfaceMap::new(0.1);
+        let mut points = Vec::new();
+        for kx in 0..40 {
+            for ky in 0..30 {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                let z = if !(1.0..2.0).contains(&y) {
+                    0.0
+                } else if (1.0..1.5).contains(&x) {
+                    0.17
+                } else if (1.5..2.0).contains(&x) {
+                    0.46
+                } else if (2.0..2.5).contains(&x) {
+                    0.74
+                } else {
+                    0.0
+                };
+                points.push(Point3::new(x, y, z));
+            }
+        }
+        map.integrate(&Point3::new(0.5, 0.5, 6.0), &points, 10.0);
+        let mut off = OffLevelColumns::default();
+        let touched = map.take_touched();
+        off.update(&map, &touched, &[0.0], &p);
+        let found = extract(&map, &mut off, &[0.0], &p);
+        assert!(found.stairs.is_empty(), "{:?}", found.stairs);
     }
 }

@@ -372,13 +372,14 @@ struct RefNode {
 /// chains): every surface is a node; a node within `level_tolerance` of a
 /// floor is on that level; two nodes of 8-neighbouring columns are
 /// step-connected when their heights differ by at most the step height
-/// (one on a level) or `max_stair_column_rise` (both off-level);
+/// (or, inside a flight, `max_stair_column_rise`: [`Self::connected`]);
 /// an off-level node is walkable when every column within the robot radius
 /// has a surface within two step heights of it.
 struct StairReference {
     res: f64,
     step: f32,
     column_rise: f32,
+    level_tolerance: f32,
     floors: Vec<f64>,
     nodes: Vec<RefNode>,
     by_col: HashMap<(i32, i32), Vec<usize>>,
@@ -451,6 +452,7 @@ impl StairReference {
             res,
             step,
             column_rise: cfg.levels.max_stair_column_rise.max(cfg.grid.step_height) as f32,
+            level_tolerance: cfg.levels.level_tolerance as f32,
             floors,
             nodes,
             by_col,
@@ -489,7 +491,7 @@ impl StairReference {
     /// Step-connected nodes of 8-neighbouring columns, and of columns two
     /// away in those directions across a column without any surface.
     fn steps(&self, i: usize) -> impl Iterator<Item = usize> + '_ {
-        let RefNode { col, z, .. } = self.nodes[i];
+        let RefNode { col, .. } = self.nodes[i];
         DIRS8.iter().flat_map(move |&(dx, dy)| {
             let near = (col.0 + dx, col.1 + dy);
             let mut cols = vec![near];
@@ -498,17 +500,43 @@ impl StairReference {
             }
             cols.into_iter()
                 .flat_map(|c| self.by_col.get(&c).into_iter().flatten().copied())
-                .filter(move |&j| {
-                    // a level's node and an off-level one: a step; two
-                    // off-level ones: a column rise
-                    let limit = if self.nodes[i].level.is_some() || self.nodes[j].level.is_some() {
-                        self.step
-                    } else {
-                        self.column_rise
-                    };
-                    (self.nodes[j].z - z).abs() <= limit
-                })
+                .filter(move |&j| self.connected(i, j))
         })
+    }
+
+    /// Step-connection of nodes `i` and `j` (neighbouring columns, or two
+    /// apart across an empty one): within a step; or both off-level, in
+    /// neighbouring columns, within a column rise, with the columns before
+    /// `i` and after `j` on that line rising the same way by a step at most
+    /// (and at least half the level tolerance) each.
+    fn connected(&self, i: usize, j: usize) -> bool {
+        let (a, b) = (self.nodes[i], self.nodes[j]);
+        let jump = b.z - a.z;
+        if jump.abs() <= self.step {
+            return true;
+        }
+        let d = (b.col.0 - a.col.0, b.col.1 - a.col.1);
+        if a.level.is_some()
+            || b.level.is_some()
+            || jump.abs() > self.column_rise
+            || d.0.abs() > 1
+            || d.1.abs() > 1
+        {
+            return false;
+        }
+        let rises = |lo: f32, hi: f32| {
+            let r = (hi - lo) * jump.signum();
+            r >= 0.5 * self.level_tolerance && r <= self.step
+        };
+        let at = |c: (i32, i32)| {
+            self.by_col
+                .get(&c)
+                .into_iter()
+                .flatten()
+                .map(|&k| self.nodes[k].z)
+        };
+        at((a.col.0 - d.0, a.col.1 - d.1)).any(|z| rises(z, a.z))
+            && at((b.col.0 + d.0, b.col.1 + d.1)).any(|z| rises(b.z, z))
     }
 
     /// The off-level nodes step-connected to off-level node `i` (its
