@@ -263,6 +263,17 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
 /// after checking the references that validation itself reads unchecked
 /// (a primitive's `POSITION` accessor: an index out of range panicked).
 fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    // gltf 1.4 subtracts the 12-byte GLB header from the declared total
+    // length unchecked (an overflow panic in debug builds): check it first.
+    if let Some(head) = bytes.get(..12).filter(|h| h.starts_with(b"glTF")) {
+        let declared = u32::from_le_bytes([head[8], head[9], head[10], head[11]]);
+        if declared < 12 {
+            return Err(err(
+                None,
+                format!("GLB header declares a total length of {declared} bytes (under 12)"),
+            ));
+        }
+    }
     let g =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| err(None, e.to_string()))?;
     let json = g.document.as_json();

@@ -515,6 +515,14 @@ fn float_typed_indices_are_an_error() {
 }
 
 #[test]
+fn glb_header_declaring_under_12_bytes_is_an_error() {
+    // found by sornav-fuzz: "attempt to subtract with overflow" in the gltf
+    // crate's GLB header check (debug builds)
+    let msg = load_error(Scene::from_gltf(&data("glb_header_length_under_12.glb")));
+    assert!(msg.contains("total length of 0 bytes"), "{msg}");
+}
+
+#[test]
 fn a_node_listing_itself_as_a_child_is_an_error() {
     // appended its mesh on every visit until 10^6 visits (4.5 GB, abort)
     let began = std::time::Instant::now();
