@@ -164,9 +164,63 @@ pub fn all() -> Vec<Target> {
     ]
 }
 
-/// The target called `name`.
+/// The target called `name`, among [`all`] and the runner's self-tests.
 pub fn find(name: &str) -> Option<Target> {
-    all().into_iter().find(|t| t.name == name)
+    all()
+        .into_iter()
+        .chain(self_tests())
+        .find(|t| t.name == name)
+}
+
+/// Targets that crash on purpose when an input starts with `!`: a panic
+/// (`selftest-panic`), a hang (`selftest-hang`), an 8 GiB allocation
+/// (`selftest-oom`: run it only in a bounded worker) and an abort (`selftest-abort`). They check
+/// the runner, are not in [`all`], and are only found by name.
+pub fn self_tests() -> Vec<Target> {
+    fn target(name: &'static str, run: fn(&[u8]) -> Outcome) -> Target {
+        Target {
+            name,
+            about: "runner self-test: crashes on inputs starting with `!`",
+            run,
+            seeds: || vec![b"ok".to_vec(), b"!".to_vec()],
+            dictionary: &[],
+            max_len: 8,
+        }
+    }
+    fn armed(bytes: &[u8]) -> bool {
+        bytes.first() == Some(&b'!')
+    }
+    vec![
+        target("selftest-panic", |b| {
+            assert!(!armed(b), "self-test panic");
+            Err("fine".into())
+        }),
+        target("selftest-hang", |b| {
+            if armed(b) {
+                std::thread::sleep(std::time::Duration::from_secs(3600));
+            }
+            Err("fine".into())
+        }),
+        target("selftest-oom", |b| {
+            if armed(b) {
+                // 8 GiB, written: beyond the worker's address-space bound
+                // (the allocation fails and the worker aborts).
+                let v = vec![1u8; 1 << 33];
+                return if v[v.len() / 2] == 1 {
+                    Ok(())
+                } else {
+                    Err("?".into())
+                };
+            }
+            Err("fine".into())
+        }),
+        target("selftest-abort", |b| {
+            if armed(b) {
+                std::process::abort();
+            }
+            Err("fine".into())
+        }),
+    ]
 }
 
 const JSON_DICT: &[&[u8]] = &[
