@@ -25,8 +25,9 @@ struct Args {
     /// Time bound per input (milliseconds).
     #[arg(long, default_value_t = 2000)]
     timeout_ms: u64,
-    /// Address-space bound of the worker process (MiB; 0: none).
-    #[arg(long, default_value_t = 1024)]
+    /// Peak resident memory bound of the worker process (MiB; 0: none);
+    /// its address space is capped at four times this.
+    #[arg(long, default_value_t = 512)]
     memory_mb: u64,
     /// Run inputs in this process (catch_unwind and a time check only; no
     /// memory bound, and a hang or abort ends the run).
@@ -53,7 +54,7 @@ fn main() -> ExitCode {
             eprintln!("unknown target {name}");
             return ExitCode::from(2);
         };
-        return match run::serve_worker(&target) {
+        return match run::serve_worker(&target, args.memory_mb) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("worker: {e}");

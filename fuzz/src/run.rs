@@ -61,7 +61,10 @@ pub struct Options {
     pub seed: u64,
     /// Time bound per input.
     pub timeout: Duration,
-    /// Address-space bound of a worker (MiB; 0: none). In-process runs
+    /// Peak resident memory bound of a worker (MiB; 0: none), checked
+    /// after every input that took over 5 ms (large allocations take
+    /// longer); the worker's address space is capped at four times the
+    /// bound, so an allocation far past it fails at once. In-process runs
     /// cannot bound memory.
     pub memory_mb: u64,
     /// The `sornav-fuzz` binary to re-exec as a worker; `None` runs inputs
@@ -79,7 +82,7 @@ impl Default for Options {
             duration: Duration::from_secs(60),
             seed: 0,
             timeout: Duration::from_secs(2),
-            memory_mb: 1024,
+            memory_mb: 512,
             worker_exe: None,
             corpus_out: None,
             crashes: None,
@@ -95,8 +98,10 @@ pub enum CrashKind {
     Panic,
     /// The input took longer than the time bound.
     Timeout,
-    /// The worker process died (abort, out of memory, signal).
+    /// The worker process died (abort, failed allocation, signal).
     Died,
+    /// The worker's peak resident memory exceeded the memory bound.
+    Memory,
 }
 
 /// One crashing input.
@@ -200,8 +205,10 @@ pub fn run(target: &Target, options: &Options) -> Result<Report, FuzzError> {
                 }
                 let w = worker.as_mut().expect("started above");
                 let e = w.exec(&input, options.timeout)?;
-                if matches!(e, Exec::Crashed(CrashKind::Timeout | CrashKind::Died, _))
-                    && let Some(mut w) = worker.take()
+                if matches!(
+                    e,
+                    Exec::Crashed(CrashKind::Timeout | CrashKind::Died | CrashKind::Memory, _)
+                ) && let Some(mut w) = worker.take()
                 {
                     w.stop();
                 }
@@ -384,7 +391,7 @@ impl Worker {
             c.arg("-c")
                 .arg(format!(
                     "ulimit -v {} && exec \"$0\" \"$@\"",
-                    memory_mb * 1024
+                    memory_mb * 4 * 1024
                 ))
                 .arg(exe);
             c
@@ -393,6 +400,8 @@ impl Worker {
         };
         cmd.arg("--worker")
             .arg(target)
+            .arg("--memory-mb")
+            .arg(memory_mb.to_string())
             .stdin(Stdio::piped())
             .stdout(Stdio::piped())
             .stderr(Stdio::inherit());
@@ -432,6 +441,7 @@ impl Worker {
             Ok(Ok((0, _))) => Ok(Exec::Done(Ok(()))),
             Ok(Ok((1, message))) => Ok(Exec::Done(Err(message))),
             Ok(Ok((2, message))) => Ok(Exec::Crashed(CrashKind::Panic, message)),
+            Ok(Ok((3, message))) => Ok(Exec::Crashed(CrashKind::Memory, message)),
             Ok(Ok((s, _))) => Err(FuzzError::Protocol(format!("status byte {s}"))),
             Ok(Err(_)) | Err(RecvTimeoutError::Disconnected) => {
                 Ok(Exec::Crashed(CrashKind::Died, self.status()))
@@ -471,12 +481,24 @@ fn read_answer(r: &mut impl Read) -> std::io::Result<(u8, String)> {
     Ok((head[0], String::from_utf8_lossy(&msg).into_owned()))
 }
 
+/// Peak resident memory of this process (`VmHWM`, bytes), where `/proc`
+/// has it.
+fn peak_rss() -> Option<u64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb * 1024)
+}
+
 /// The worker side: reads inputs from stdin, runs `target` on each and
-/// answers on stdout, until stdin closes.
+/// answers on stdout, until stdin closes. After an input that took over
+/// 5 ms, a peak resident memory above `memory_mb` (0: unchecked) is
+/// answered as a memory crash and the worker exits (the parent starts a
+/// fresh one).
 ///
 /// # Errors
 /// [`FuzzError::Io`] when stdin or stdout fail.
-pub fn serve_worker(target: &Target) -> Result<(), FuzzError> {
+pub fn serve_worker(target: &Target, memory_mb: u64) -> Result<(), FuzzError> {
     let mut stdin = std::io::stdin().lock();
     let mut stdout = std::io::stdout().lock();
     loop {
@@ -488,11 +510,23 @@ pub fn serve_worker(target: &Target) -> Result<(), FuzzError> {
         }
         let mut input = vec![0u8; u32::from_le_bytes(len) as usize];
         stdin.read_exact(&mut input).map_err(io("worker stdin"))?;
-        let (status, message) = match run_caught(target, &input) {
+        let t = Instant::now();
+        let (mut status, mut message) = match run_caught(target, &input) {
             Ok(Ok(())) => (0u8, String::new()),
             Ok(Err(e)) => (1, e),
             Err(panic) => (2, panic),
         };
+        let over = (memory_mb > 0 && t.elapsed() > Duration::from_millis(5))
+            .then(peak_rss)
+            .flatten()
+            .filter(|&peak| peak > memory_mb << 20);
+        if let Some(peak) = over {
+            status = 3;
+            message = format!(
+                "peak resident memory {} MiB over the {memory_mb} MiB bound",
+                peak >> 20
+            );
+        }
         // Error texts only feed signatures: the first 4 KiB are enough.
         let mut end = message.len().min(4096);
         while !message.is_char_boundary(end) {
@@ -505,6 +539,9 @@ pub fn serve_worker(target: &Target) -> Result<(), FuzzError> {
             .and_then(|()| stdout.write_all(message))
             .and_then(|()| stdout.flush())
             .map_err(io("worker stdout"))?;
+        if over.is_some() {
+            return Ok(());
+        }
     }
 }
 

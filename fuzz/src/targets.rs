@@ -174,7 +174,8 @@ pub fn find(name: &str) -> Option<Target> {
 
 /// Targets that crash on purpose when an input starts with `!`: a panic
 /// (`selftest-panic`), a hang (`selftest-hang`), an 8 GiB allocation
-/// (`selftest-oom`: run it only in a bounded worker) and an abort (`selftest-abort`). They check
+/// (`selftest-oom`: run it only in a bounded worker), 256 MiB resident
+/// (`selftest-rss`) and an abort (`selftest-abort`). They check
 /// the runner, are not in [`all`], and are only found by name.
 pub fn self_tests() -> Vec<Target> {
     fn target(name: &'static str, run: fn(&[u8]) -> Outcome) -> Target {
@@ -214,6 +215,19 @@ pub fn self_tests() -> Vec<Target> {
             }
             Err("fine".into())
         }),
+        target("selftest-rss", |b| {
+            if armed(b) {
+                // 256 MiB, written: over a 128 MiB resident bound, under
+                // the 512 MiB address-space cap that goes with it.
+                let v = vec![1u8; 256 << 20];
+                return if v[v.len() / 2] == 1 {
+                    Ok(())
+                } else {
+                    Err("?".into())
+                };
+            }
+            Err("fine".into())
+        }),
         target("selftest-abort", |b| {
             if armed(b) {
                 std::process::abort();
@@ -224,6 +238,9 @@ pub fn self_tests() -> Vec<Target> {
 }
 
 const JSON_DICT: &[&[u8]] = &[
+    b"\"uri\":\"gltf_triangle.bin\"",
+    b"/dev/zero",
+    b"../",
     b"{",
     b"}",
     b"[",
@@ -338,7 +355,10 @@ fn files(dir: Option<PathBuf>, suffix: &str, max_bytes: u64) -> Vec<Vec<u8>> {
 // ---------------------------------------------------------------- glTF
 
 fn run_gltf(bytes: &[u8]) -> Outcome {
-    sornav_platform_sim::gltf::gltf_from_slice(bytes, "fuzz", None)
+    // External buffers resolve against platform-sim's test data (the
+    // triangle seed's `.bin` is there).
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("../platform-sim/tests/data");
+    sornav_platform_sim::gltf::gltf_from_slice(bytes, "fuzz", Some(&base))
         .map(drop)
         .map_err(|e| e.to_string())
 }
@@ -398,6 +418,7 @@ fn seeds_gltf() -> Vec<Vec<u8>> {
         include_str!("../../platform-sim/tests/data/gltf_node_cycle.gltf"),
         include_str!("../../platform-sim/tests/data/gltf_float_indices.gltf"),
         include_str!("../../platform-sim/tests/data/gltf_triangle.gltf"),
+        include_str!("../../platform-sim/tests/data/gltf_buffer_dev_zero.gltf"),
     ] {
         seeds.push(text.as_bytes().to_vec());
     }

@@ -1,4 +1,5 @@
-//! The runner itself: panics, hangs, out-of-memory and aborts in a worker
+//! The runner itself: panics, hangs, failed allocations, resident memory
+//! over the bound and aborts in a worker
 //! process are crashes, saved, and the worker is restarted.
 
 use std::time::Duration;
@@ -11,8 +12,8 @@ fn crash_kinds(name: &str) -> (run::Report, Vec<CrashKind>) {
     let target = targets::find(name).unwrap();
     let options = run::Options {
         duration: Duration::from_millis(1500),
-        timeout: Duration::from_millis(300),
-        memory_mb: 512,
+        timeout: Duration::from_millis(1000),
+        memory_mb: 128,
         worker_exe: Some(env!("CARGO_BIN_EXE_sornav-fuzz").into()),
         crashes: Some(dir),
         ..run::Options::default()
@@ -34,6 +35,14 @@ fn worker_crashes_are_caught_saved_and_the_worker_restarts() {
     assert!(kinds.contains(&CrashKind::Timeout), "{r:?}");
     assert!(r.workers >= 2, "{r:?}");
     assert!(r.inputs > r.crashes, "inputs after the hang ran: {r:?}");
+
+    let (r, kinds) = crash_kinds("selftest-rss");
+    assert_eq!(kinds, [CrashKind::Memory], "{r:?}");
+    assert!(
+        r.crash_list[0].message.contains("over the 128 MiB bound"),
+        "{r:?}"
+    );
+    assert!(r.workers >= 2, "{r:?}");
 
     for name in ["selftest-oom", "selftest-abort"] {
         let (r, kinds) = crash_kinds(name);
