@@ -369,9 +369,9 @@ fn check_accessor(
 /// Largest external buffer (`byteLength`) a glTF file may declare.
 pub const MAX_GLTF_BUFFER_BYTES: usize = 1 << 30;
 
-/// Reads the `declared` bytes of an external buffer: only a regular file
-/// (a URI naming `/dev/zero` or a FIFO read without end or blocked), and
-/// never more than declared.
+/// Reads the `declared` bytes of an external buffer, only from a regular
+/// file and never more than declared (a URI naming `/dev/zero` was read
+/// without end; a FIFO would block).
 fn read_external_buffer(p: &Path, declared: usize) -> Result<Vec<u8>, SceneError> {
     use std::io::Read;
     let io = |e: std::io::Error| SceneError::Io {
