@@ -62,9 +62,11 @@ fn kind_and_category(label: &str) -> (InstanceKind, String) {
 ///
 /// # Errors
 /// [`SceneError::Io`] when the file or a buffer cannot be read,
-/// [`SceneError::Gltf`] (naming the node where relevant) for malformed files
-/// (references out of range, accessors of the wrong type or outside their
-/// buffers, sparse accessors, a node hierarchy that is not a set of strict
+/// [`SceneError::Gltf`] (naming the node where relevant) for an external
+/// buffer that is not a regular file or declares more than
+/// [`MAX_GLTF_BUFFER_BYTES`], and for malformed files (references out of
+/// range, accessors of the wrong type or outside their buffers, sparse
+/// accessors, a node hierarchy that is not a set of strict
 /// trees), non-triangle-list indices, non-finite positions or more than
 /// [`MAX_GLTF_TRIANGLES`] triangles, [`SceneError::Empty`] when no triangles
 /// are found.
@@ -108,11 +110,7 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
                 let base = base.ok_or_else(|| {
                     err(None, format!("external buffer `{uri}` without a base path"))
                 })?;
-                let p = base.join(uri);
-                std::fs::read(&p).map_err(|e| SceneError::Io {
-                    path: p.clone(),
-                    source: e,
-                })?
+                read_external_buffer(&base.join(uri), b.length())?
             }
         };
         if data.len() < b.length() {
@@ -263,6 +261,17 @@ pub fn gltf_from_slice(bytes: &[u8], name: &str, base: Option<&Path>) -> Result<
 /// after checking the references that validation itself reads unchecked
 /// (a primitive's `POSITION` accessor: an index out of range panicked).
 fn parse_and_validate(bytes: &[u8]) -> Result<gltf::Gltf, SceneError> {
+    // gltf 1.4 subtracts the 12-byte GLB header from the declared total
+    // length unchecked (an overflow panic in debug builds): check it first.
+    if let Some(head) = bytes.get(..12).filter(|h| h.starts_with(b"glTF")) {
+        let declared = u32::from_le_bytes([head[8], head[9], head[10], head[11]]);
+        if declared < 12 {
+            return Err(err(
+                None,
+                format!("GLB header declares a total length of {declared} bytes (under 12)"),
+            ));
+        }
+    }
     let g =
         gltf::Gltf::from_slice_without_validation(bytes).map_err(|e| err(None, e.to_string()))?;
     let json = g.document.as_json();
@@ -355,6 +364,40 @@ fn check_accessor(
         )));
     }
     Ok(())
+}
+
+/// Largest external buffer (`byteLength`) a glTF file may declare.
+pub const MAX_GLTF_BUFFER_BYTES: usize = 1 << 30;
+
+/// Reads the `declared` bytes of an external buffer, only from a regular
+/// file and never more than declared (a URI naming `/dev/zero` was read
+/// without end; a FIFO would block).
+fn read_external_buffer(p: &Path, declared: usize) -> Result<Vec<u8>, SceneError> {
+    use std::io::Read;
+    let io = |e: std::io::Error| SceneError::Io {
+        path: p.to_path_buf(),
+        source: e,
+    };
+    if declared > MAX_GLTF_BUFFER_BYTES {
+        return Err(err(
+            None,
+            format!(
+                "buffer `{}` declares {declared} bytes (MAX_GLTF_BUFFER_BYTES is {MAX_GLTF_BUFFER_BYTES})",
+                p.display()
+            ),
+        ));
+    }
+    if !std::fs::metadata(p).map_err(io)?.is_file() {
+        return Err(err(
+            None,
+            format!("buffer `{}` is not a regular file", p.display()),
+        ));
+    }
+    let mut data = Vec::new();
+    std::fs::File::open(p)
+        .and_then(|f| f.take(declared as u64).read_to_end(&mut data))
+        .map_err(io)?;
+    Ok(data)
 }
 
 /// Most triangles a glTF scene may expand to (after node instancing): a

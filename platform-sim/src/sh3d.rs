@@ -458,32 +458,76 @@ pub fn home_from_xml_str(
     build_home(xml, name, &mut resolve, options)
 }
 
+/// Most bytes one entry of a `.sh3d` archive (`Home.xml` or a model) may
+/// decompress to.
+pub const MAX_SH3D_ENTRY_BYTES: u64 = 64 << 20;
+
 /// Loads a `.sh3d` archive (its `Home.xml` entry and embedded models).
 ///
 /// # Errors
-/// [`SceneError::Zip`] for an unreadable archive or one without `Home.xml`,
-/// then as [`load_home_xml`].
+/// [`SceneError::Io`] when the file cannot be opened, [`SceneError::Zip`]
+/// for an unreadable archive, one without `Home.xml` or an entry that
+/// decompresses to more than [`MAX_SH3D_ENTRY_BYTES`], then as
+/// [`load_home_xml`].
 pub fn load_sh3d(path: &Path, options: &Sh3dOptions) -> Result<Scene, SceneError> {
     let file = std::fs::File::open(path).map_err(|e| SceneError::Io {
         path: path.to_path_buf(),
         source: e,
     })?;
-    let mut zip = zip::ZipArchive::new(file).map_err(|e| SceneError::Zip(e.to_string()))?;
-    let read = |zip: &mut zip::ZipArchive<std::fs::File>, n: &str| -> Result<String, SceneError> {
-        let mut f = zip
-            .by_name(n)
-            .map_err(|e| SceneError::Zip(format!("{n}: {e}")))?;
-        let mut buf = Vec::new();
-        f.read_to_end(&mut buf)
-            .map_err(|e| SceneError::Zip(format!("{n}: {e}")))?;
-        Ok(String::from_utf8_lossy(&buf).to_string())
-    };
-    let xml = read(&mut zip, "Home.xml")?;
-    let names: Vec<String> = zip.file_names().map(str::to_string).collect();
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().to_string())
         .unwrap_or_default();
+    sh3d_from_reader(file, &name, options)
+}
+
+/// Builds a scene from the bytes of a `.sh3d` archive (as [`load_sh3d`],
+/// without a file); `name` names the scene.
+///
+/// # Errors
+/// As [`load_sh3d`].
+///
+/// # Examples
+/// ```
+/// use sornav_platform_sim::SceneError;
+/// use sornav_platform_sim::sh3d::{Sh3dOptions, sh3d_from_slice};
+/// let err = sh3d_from_slice(b"not a zip", "home", &Sh3dOptions::default()).unwrap_err();
+/// assert!(matches!(err, SceneError::Zip(_)));
+/// ```
+pub fn sh3d_from_slice(
+    bytes: &[u8],
+    name: &str,
+    options: &Sh3dOptions,
+) -> Result<Scene, SceneError> {
+    sh3d_from_reader(std::io::Cursor::new(bytes), name, options)
+}
+
+fn sh3d_from_reader<R: Read + std::io::Seek>(
+    reader: R,
+    name: &str,
+    options: &Sh3dOptions,
+) -> Result<Scene, SceneError> {
+    let mut zip = zip::ZipArchive::new(reader).map_err(|e| SceneError::Zip(e.to_string()))?;
+    let read = |zip: &mut zip::ZipArchive<R>, n: &str| -> Result<String, SceneError> {
+        let mut f = zip
+            .by_name(n)
+            .map_err(|e| SceneError::Zip(format!("{n}: {e}")))?;
+        let mut buf = Vec::new();
+        // Inflate at most one byte past the limit: a small archive may
+        // decompress a thousandfold.
+        (&mut f)
+            .take(MAX_SH3D_ENTRY_BYTES + 1)
+            .read_to_end(&mut buf)
+            .map_err(|e| SceneError::Zip(format!("{n}: {e}")))?;
+        if buf.len() as u64 > MAX_SH3D_ENTRY_BYTES {
+            return Err(SceneError::Zip(format!(
+                "{n}: decompresses to more than {MAX_SH3D_ENTRY_BYTES} bytes (MAX_SH3D_ENTRY_BYTES)"
+            )));
+        }
+        Ok(String::from_utf8_lossy(&buf).to_string())
+    };
+    let xml = read(&mut zip, "Home.xml")?;
+    let names: Vec<String> = zip.file_names().map(str::to_string).collect();
     let mut resolve = |model: &str| -> Option<Result<String, SceneError>> {
         let entry = if names.iter().any(|n| n == model) {
             model.to_string()
@@ -495,7 +539,7 @@ pub fn load_sh3d(path: &Path, options: &Sh3dOptions) -> Result<Scene, SceneError
         };
         Some(read(&mut zip, &entry))
     };
-    build_home(&xml, &name, &mut resolve, options)
+    build_home(&xml, name, &mut resolve, options)
 }
 
 impl Scene {

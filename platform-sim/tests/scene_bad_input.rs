@@ -365,3 +365,31 @@ fn unbounded_wall_arc_extent_is_an_attribute_error() {
     );
     assert!(began.elapsed() < std::time::Duration::from_secs(10));
 }
+
+#[test]
+fn sh3d_entries_that_inflate_past_the_limit_are_zip_errors() {
+    use sornav_platform_sim::sh3d::{MAX_SH3D_ENTRY_BYTES, sh3d_from_slice};
+    use std::io::Write;
+    // A `Home.xml` padded with spaces to one byte past the limit deflates to
+    // about 65 KB: without the bound such an archive inflates without limit.
+    let mut xml = WALLS.as_bytes().to_vec();
+    xml.resize(MAX_SH3D_ENTRY_BYTES as usize + 1, b' ');
+    let mut z = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    let options = zip::write::SimpleFileOptions::default()
+        .compression_method(zip::CompressionMethod::Deflated)
+        .large_file(false);
+    z.start_file("Home.xml", options).unwrap();
+    z.write_all(&xml).unwrap();
+    let bytes = z.finish().unwrap().into_inner();
+    assert!(bytes.len() < 1 << 20, "{}", bytes.len());
+    match sh3d_from_slice(&bytes, "bomb", &Sh3dOptions::default()) {
+        Err(SceneError::Zip(m)) => assert!(m.contains("MAX_SH3D_ENTRY_BYTES"), "{m}"),
+        other => panic!("{other:?}"),
+    }
+    // The same home within the limit loads.
+    let mut z = zip::ZipWriter::new(std::io::Cursor::new(Vec::new()));
+    z.start_file("Home.xml", options).unwrap();
+    z.write_all(WALLS.as_bytes()).unwrap();
+    let bytes = z.finish().unwrap().into_inner();
+    assert!(sh3d_from_slice(&bytes, "home", &Sh3dOptions::default()).is_ok());
+}

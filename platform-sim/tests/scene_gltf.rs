@@ -515,6 +515,34 @@ fn float_typed_indices_are_an_error() {
 }
 
 #[test]
+fn glb_header_declaring_under_12_bytes_is_an_error() {
+    // found by sornav-fuzz: "attempt to subtract with overflow" in the gltf
+    // crate's GLB header check (debug builds)
+    let msg = load_error(Scene::from_gltf(&data("glb_header_length_under_12.glb")));
+    assert!(msg.contains("total length of 0 bytes"), "{msg}");
+}
+
+#[test]
+fn an_external_buffer_that_is_not_a_regular_file_is_an_error() {
+    // found by sornav-fuzz: a buffer URI naming /dev/zero was read without
+    // end (1 GiB and growing); only the declared bytes of a regular file
+    // are read now
+    let began = std::time::Instant::now();
+    let msg = load_error(Scene::from_gltf(&data("gltf_buffer_dev_zero.gltf")));
+    assert!(msg.contains("not a regular file"), "{msg}");
+    assert!(began.elapsed() < std::time::Duration::from_secs(5));
+    let big = std::fs::read_to_string(data("gltf_triangle.gltf"))
+        .unwrap()
+        .replace("\"byteLength\":48", "\"byteLength\":4294967296");
+    let msg = load_error(gltf_from_slice(
+        big.as_bytes(),
+        "big",
+        Some(&data("gltf_triangle.gltf").with_file_name("")),
+    ));
+    assert!(msg.contains("MAX_GLTF_BUFFER_BYTES"), "{msg}");
+}
+
+#[test]
 fn a_node_listing_itself_as_a_child_is_an_error() {
     // appended its mesh on every visit until 10^6 visits (4.5 GB, abort)
     let began = std::time::Instant::now();

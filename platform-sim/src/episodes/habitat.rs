@@ -182,15 +182,45 @@ impl HabitatDataset {
             path: path.to_path_buf(),
             source: e,
         };
-        let too_large = || EpisodeError::TooLarge {
-            path: path.to_path_buf(),
-            limit: MAX_EPISODE_FILE_BYTES,
-        };
         let limit = MAX_EPISODE_FILE_BYTES as u64;
         let mut bytes = Vec::new();
         std::fs::File::open(path)
             .and_then(|f| f.take(limit + 1).read_to_end(&mut bytes))
             .map_err(io)?;
+        HabitatDataset::from_bytes(&bytes, path)
+    }
+
+    /// Parses the bytes of a `.json` or `.json.gz` file (gzip is detected by
+    /// its magic bytes), as [`HabitatDataset::read`] does after reading the
+    /// file; `origin` names the source in errors.
+    ///
+    /// # Errors
+    /// [`EpisodeError::Io`] when the gzip stream cannot be decompressed,
+    /// [`EpisodeError::TooLarge`] when the bytes or the decompressed text
+    /// exceed [`MAX_EPISODE_FILE_BYTES`], [`EpisodeError::Json`] when the text
+    /// is not UTF-8 or does not follow the schema.
+    ///
+    /// # Examples
+    /// ```
+    /// use std::path::Path;
+    /// use sornav_platform_sim::episodes::habitat::HabitatDataset;
+    /// let data = HabitatDataset::from_bytes(br#"{"episodes": []}"#, Path::new("inline")).unwrap();
+    /// assert!(data.episodes.is_empty());
+    /// assert!(HabitatDataset::from_bytes(&[0x1f, 0x8b, 0, 1], Path::new("inline")).is_err());
+    /// ```
+    ///
+    /// # Complexity
+    /// O(decompressed size).
+    pub fn from_bytes(bytes: &[u8], origin: &Path) -> Result<HabitatDataset, EpisodeError> {
+        let io = |e: std::io::Error| EpisodeError::Io {
+            path: origin.to_path_buf(),
+            source: e,
+        };
+        let too_large = || EpisodeError::TooLarge {
+            path: origin.to_path_buf(),
+            limit: MAX_EPISODE_FILE_BYTES,
+        };
+        let limit = MAX_EPISODE_FILE_BYTES as u64;
         if bytes.len() as u64 > limit {
             return Err(too_large());
         }
@@ -198,7 +228,7 @@ impl HabitatDataset {
             // Decompress at most one byte past the limit: a small file may
             // inflate a thousandfold.
             let mut s = String::new();
-            flate2::read::GzDecoder::new(&bytes[..])
+            flate2::read::GzDecoder::new(bytes)
                 .take(limit + 1)
                 .read_to_string(&mut s)
                 .map_err(io)?;
@@ -207,12 +237,12 @@ impl HabitatDataset {
             }
             s
         } else {
-            String::from_utf8(bytes).map_err(|e| EpisodeError::Json {
-                path: path.to_path_buf(),
+            String::from_utf8(bytes.to_vec()).map_err(|e| EpisodeError::Json {
+                path: origin.to_path_buf(),
                 message: format!("not UTF-8: {e}"),
             })?
         };
-        HabitatDataset::from_json(&text, path)
+        HabitatDataset::from_json(&text, origin)
     }
 
     /// Writes the dataset as JSON, gzipped when the path ends in `.gz`.
