@@ -846,18 +846,26 @@ impl Agent {
     }
 
     /// `Some(whether the robot stands at it)` when `frontier` is an open
-    /// stair end of G_F (within [`STAIR_END_REACH`] horizontally and a step
-    /// height vertically of its viewpoint), `None` otherwise or before the
-    /// first observation.
+    /// stair end of G_F (within [`STAIR_END_REACH`] horizontally of its
+    /// viewpoint, and vertically within the rise the map accepts between
+    /// neighbouring stair columns: a step, or `max_stair_column_rise` on a
+    /// flight whose treads are shallower than a column, where the end
+    /// column's top is a tread or two above the one the robot stands on),
+    /// `None` otherwise or before the first observation.
     fn at_stair_end(&self, frontier: FrontierId) -> Option<bool> {
         if !self.frontiers.is_stair_frontier(frontier) {
             return None;
         }
         let (pose, node) = (self.pose?, self.frontiers.graph().frontier(frontier)?);
         let end = node.viewpoint3();
+        let frontier_config = &self.config.frontier;
+        let rise = frontier_config
+            .grid
+            .step_height
+            .max(frontier_config.levels.max_stair_column_rise);
         Some(
             (end.xy() - pose.position.xy()).norm() <= STAIR_END_REACH
-                && (end.z - pose.position.z).abs() <= self.config.frontier.grid.step_height,
+                && (end.z - pose.position.z).abs() <= rise,
         )
     }
 
