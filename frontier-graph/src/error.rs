@@ -42,4 +42,13 @@ pub enum FrontierError {
         /// Configured limit.
         limit: u64,
     },
+    /// A contact farther from the robot than [`crate::MAX_CONTACT_REACH_M`]:
+    /// the body cannot have met it.
+    #[error("contact {distance} m from the robot, farther than {limit} m")]
+    ContactOutOfReach {
+        /// Distance from the robot's feet to the contact (m).
+        distance: f64,
+        /// The limit (m).
+        limit: f64,
+    },
 }

@@ -2,6 +2,8 @@
 //! incremental inflation by the robot radius.
 
 use nalgebra::{Point2, Point3};
+use std::collections::BTreeSet;
+
 use serde::{Deserialize, Serialize};
 
 use crate::cell::{cell_center, cell_of};
@@ -62,6 +64,11 @@ pub struct OccupancyGrid {
     mark: Vec<u8>,
     /// Offsets of the inflation disk.
     disk: Vec<(i32, i32)>,
+    /// Contact cells: where the robot's body was stopped by something its
+    /// sensor did not show (glass, an edge with nothing beyond). They hold
+    /// the clamp's upper log-odds for good: no later miss clears them.
+    #[serde(default)]
+    contacts: BTreeSet<Cell>,
     /// Identifies the traversable layer's content: a fresh process-wide
     /// value whenever it changes (or the grid is resized or loaded), so
     /// caches derived from it (search components) know when they are stale.
@@ -87,6 +94,8 @@ struct GridData {
     trav: Vec<bool>,
     frontier: Vec<bool>,
     segment: Vec<u64>,
+    #[serde(default)]
+    contacts: BTreeSet<Cell>,
 }
 
 impl TryFrom<GridData> for OccupancyGrid {
@@ -132,6 +141,19 @@ impl TryFrom<GridData> for OccupancyGrid {
         {
             return bad("log-odds outside the clamp range");
         }
+        let in_grid = |c: &Cell| {
+            let (x, y) = (i64::from(c.x - d.min.x), i64::from(c.y - d.min.y));
+            (0..d.width as i64).contains(&x) && (0..d.height as i64).contains(&y)
+        };
+        if !d.contacts.iter().all(|c| {
+            in_grid(c)
+                && f64::from(
+                    d.log_odds[(c.y - d.min.y) as usize * d.width + (c.x - d.min.x) as usize],
+                ) >= hi - 1e-6
+        }) {
+            return bad("contact cell outside the grid or below the clamp's upper log-odds");
+        }
+        g.contacts = d.contacts;
         g.min = d.min;
         g.width = d.width;
         g.height = d.height;
@@ -206,6 +228,7 @@ impl OccupancyGrid {
             segment: Vec::new(),
             mark: Vec::new(),
             disk,
+            contacts: BTreeSet::new(),
             trav_version: fresh_version(),
         })
     }
@@ -387,6 +410,40 @@ impl OccupancyGrid {
         Ok(())
     }
 
+    /// Records a contact: the robot at `origin` (its body centre, at any
+    /// height) was stopped by an obstacle at `point` that the sensor did
+    /// not show. The point's cell becomes occupied for good (later scans
+    /// never clear it) and the cells between are free, as for a return in
+    /// the obstacle band; inflation, traversability and the returned delta
+    /// follow as for [`Self::integrate`].
+    ///
+    /// # Errors
+    /// As [`Self::integrate`] for non-finite or out-of-range coordinates.
+    ///
+    /// # Complexity
+    /// O(L + r² + log K) for a ray of L cells, robot radius r (cells) and K
+    /// contacts.
+    pub(crate) fn contact(
+        &mut self,
+        origin: &Point3<f64>,
+        point: &Point2<f64>,
+    ) -> Result<GridDelta, FrontierError> {
+        let cell = cell_of(point, self.cfg.resolution, "contact", 0)?;
+        let z = self.cfg.floor_z + 0.5 * (self.cfg.step_height + self.cfg.robot_height);
+        let from = Point3::new(origin.x, origin.y, z);
+        let inserted = self.contacts.insert(cell);
+        let delta = self.integrate(&from, &[Point3::new(point.x, point.y, z)]);
+        if delta.is_err() && inserted {
+            self.contacts.remove(&cell);
+        }
+        delta
+    }
+
+    /// The contact cells ([`Self::contact`]), in cell order.
+    pub fn contacts(&self) -> impl ExactSizeIterator<Item = Cell> + '_ {
+        self.contacts.iter().copied()
+    }
+
     /// Integrates one scan: `points` are world returns seen from the sensor at
     /// `origin`. See [`crate::FrontierMap::update`] for the sensor model.
     ///
@@ -488,7 +545,11 @@ impl OccupancyGrid {
                 self.cfg.log_odds_miss
             };
             let old = self.state_at(i);
-            let l = (f64::from(self.log_odds[i]) + inc).clamp(lmin, lmax);
+            let l = if !self.contacts.is_empty() && self.contacts.contains(&self.cell_at(i)) {
+                lmax
+            } else {
+                (f64::from(self.log_odds[i]) + inc).clamp(lmin, lmax)
+            };
             // Log-odds are small (clamped), f32 is plenty.
             #[allow(clippy::cast_possible_truncation)]
             {

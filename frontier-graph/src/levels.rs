@@ -594,6 +594,34 @@ impl MultiLevelMap {
         Ok(stats)
     }
 
+    /// Records a contact on the level the robot stands on: the robot at
+    /// `feet` was stopped by an obstacle at `point` (horizontal position)
+    /// that its sensor did not show. See [`FrontierMap::contact`]. Returns
+    /// the level, or `None` (nothing recorded) when the robot stands on no
+    /// level (on a stair: its treads are not in a level's grid) or the
+    /// level's map already explains the contact.
+    ///
+    /// # Errors
+    /// As [`FrontierMap::contact`]; nothing is modified then.
+    ///
+    /// # Complexity
+    /// That of [`FrontierMap::contact`].
+    pub fn contact(
+        &mut self,
+        feet: &Point3<f64>,
+        point: &Point2<f64>,
+    ) -> Result<Option<LevelId>, FrontierError> {
+        let res = self.cfg.grid.resolution;
+        Self::check(feet, "pose", res)?;
+        cell_of(point, res, "contact", 0)?;
+        let Some(level) = self.level_at(feet.z) else {
+            return Ok(None);
+        };
+        Ok(self.maps[usize::from(level.0)]
+            .contact(feet, point)?
+            .map(|_| level))
+    }
+
     /// Recomputes every level's frontier segmentation from scratch, marks
     /// every edge for recomputation and forces a stair extraction at the
     /// next [`frontier_graph`](Self::frontier_graph) (the non-incremental

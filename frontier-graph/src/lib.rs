@@ -121,6 +121,10 @@ pub use levels::{Level, Location, MultiLevelMap, STAIR_FRONTIER_BASE};
 pub use map::{FrontierMap, RefreshStats, UpdateStats, path_cells};
 pub use stairs::{Stair, StairEnd};
 
+/// Farthest a contact may lie from the robot's feet (m): a body meets what
+/// is within its own size and one forward move, never metres away.
+pub const MAX_CONTACT_REACH_M: f64 = 2.0;
+
 /// petgraph, re-exported deliberately: [`FrontierGraph::to_petgraph`]
 /// returns its types, so callers use this (0.x) version through this path.
 pub use petgraph;

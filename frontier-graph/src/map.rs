@@ -4,10 +4,12 @@ use nalgebra::{Point2, Point3};
 use rustc_hash::{FxHashMap, FxHashSet};
 use serde::{Deserialize, Serialize};
 
+use crate::CellState;
 use crate::cell::cell_of;
 use crate::components::Components;
 use crate::frontier::Detector;
 use crate::graph::pair;
+use crate::grid::GridDelta;
 use crate::search::{ExtractedPath, Scratch, dijkstra, extract_path};
 use crate::{
     AnchorNode, Cell, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMapConfig, LevelId,
@@ -271,13 +273,86 @@ impl FrontierMap {
         points: &[Point3<f64>],
     ) -> Result<UpdateStats, FrontierError> {
         let delta = self.grid.integrate(origin, points)?;
+        Ok(self.apply(&delta))
+    }
+
+    /// Records a contact: the robot standing at `feet` was stopped by an
+    /// obstacle at `point` (horizontal position) that its sensor did not
+    /// show (glass, an edge with nothing visible beyond it). The point's
+    /// cell becomes occupied and stays so whatever later scans show; the
+    /// map's inflation, traversability and frontiers follow as after
+    /// [`update`](Self::update), so frontiers reached only through the
+    /// contact become unreachable.
+    ///
+    /// A contact the map already explains — an occupied cell within the
+    /// robot radius of the segment from `feet` to `point`, the disc the
+    /// body sweeps (a door jamb or a table leg the robot grazed: the map
+    /// knows it, the body's shape met it first) — is not recorded:
+    /// `Ok(None)`. Else the update's statistics.
+    ///
+    /// # Errors
+    /// As [`update`](Self::update) for non-finite or out-of-range
+    /// coordinates, [`FrontierError::ContactOutOfReach`] for a point
+    /// farther than [`crate::MAX_CONTACT_REACH_M`] from `feet`; nothing is
+    /// modified then.
+    ///
+    /// # Complexity
+    /// That of [`update`](Self::update) for one return, plus O((L + r) r)
+    /// for a segment of L cells and the robot radius r (cells).
+    pub fn contact(
+        &mut self,
+        feet: &Point3<f64>,
+        point: &Point2<f64>,
+    ) -> Result<Option<UpdateStats>, FrontierError> {
+        let res = self.grid.resolution();
+        let from = feet.xy();
+        Self::check_pose(&from, "feet", res)?;
+        Self::check_pose(point, "contact", res)?;
+        let distance = (point - from).norm();
+        if distance > crate::MAX_CONTACT_REACH_M {
+            return Err(FrontierError::ContactOutOfReach {
+                distance,
+                limit: crate::MAX_CONTACT_REACH_M,
+            });
+        }
+        let r = self.cfg.grid.robot_radius;
+        let (a, b) = (self.grid.cell_of(&from)?, self.grid.cell_of(point)?);
+        // Bounded by GridConfig::validate (<= 200 cells).
+        #[allow(clippy::cast_possible_truncation)]
+        let ri = (r / res).ceil() as i32;
+        let ab = point - from;
+        let len2 = ab.norm_squared();
+        let swept = |c: Cell| {
+            let q = self.grid.cell_center(c);
+            let t = if len2 > 0.0 {
+                ((q - from).dot(&ab) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            (from + ab * t - q).norm() <= r + 1e-9
+        };
+        let explained = (a.y.min(b.y) - ri..=a.y.max(b.y) + ri).any(|y| {
+            (a.x.min(b.x) - ri..=a.x.max(b.x) + ri).any(|x| {
+                let c = Cell::new(x, y);
+                self.grid.state(c) == CellState::Occupied && swept(c)
+            })
+        });
+        if explained {
+            return Ok(None);
+        }
+        let delta = self.grid.contact(feet, point)?;
+        Ok(Some(self.apply(&delta)))
+    }
+
+    /// Frontiers and pending graph work after a grid change.
+    fn apply(&mut self, delta: &GridDelta) -> UpdateStats {
         let changes = Detector {
             grid: &mut self.grid,
             nodes: &mut self.graph.frontiers,
             next_id: &mut self.next_id,
             cfg: &self.cfg.frontier,
         }
-        .update(&delta);
+        .update(delta);
         self.stamp_nodes();
         for id in &changes.removed {
             self.pending.added.remove(id);
@@ -285,13 +360,13 @@ impl FrontierMap {
         self.pending.added.extend(changes.added.iter().copied());
         self.pending.gained.extend(delta.gained.iter().copied());
         self.pending.lost.extend(delta.lost.iter().copied());
-        Ok(UpdateStats {
+        UpdateStats {
             cells_changed: delta.state_changed.len(),
             cells_gained: delta.gained.len(),
             cells_lost: delta.lost.len(),
             frontiers_added: changes.added.len(),
             frontiers_removed: changes.removed.len(),
-        })
+        }
     }
 
     /// Recomputes the frontier segmentation from scratch and marks every edge

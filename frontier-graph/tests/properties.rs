@@ -323,3 +323,132 @@ proptest! {
         prop_assert!(kept > 0 || seen.is_empty());
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 32, ..ProptestConfig::default() })]
+
+    /// Contacts (obstacles the sensor did not show) interleaved with scans
+    /// at random: every recorded contact cell stays occupied whatever the
+    /// later scans show; traversability stays "free and no occupied cell within the
+    /// robot radius" (brute force); the incremental map equals a rebuild
+    /// from scratch; a serialised map restores its contacts.
+    #[test]
+    fn contacts_stay_occupied_and_the_map_stays_consistent(
+        (world, origins) in world_strategy(),
+        contacts in prop::collection::vec((0.3f64..5.7, 0.3f64..5.7, 0.0f64..6.3), 1..6),
+    ) {
+        prop_assume!(!origins.is_empty());
+        let mut map = FrontierMap::new(config()).unwrap();
+        let res = map.config().grid.resolution;
+        let mut expected = BTreeSet::new();
+        for (k, o) in origins.iter().enumerate() {
+            let pts = world.scan(*o, 120, map.config().grid.max_range);
+            map.update(&nalgebra::Point3::new(o.x, o.y, 0.5), &pts).unwrap();
+            let (x, y, yaw) = contacts[k % contacts.len()];
+            let p = Point2::new(x + 0.3 * yaw.cos(), y + 0.3 * yaw.sin());
+            if map.contact(&nalgebra::Point3::new(x, y, 0.0), &p).unwrap().is_some() {
+                expected.insert(map.grid().cell_of(&p).unwrap());
+            }
+            map.frontier_graph(o).unwrap();
+        }
+        // A last round of scans from every origin: rays cross the contacts.
+        explore(&mut map, &world, &origins, 180);
+        let grid = map.grid();
+        let got: BTreeSet<Cell> = grid.contacts().collect();
+        prop_assert_eq!(&got, &expected);
+        for &c in &expected {
+            prop_assert_eq!(grid.state(c), CellState::Occupied, "contact {:?}", c);
+        }
+        let r = map.config().grid.robot_radius;
+        let ri = (r / res).ceil() as i32;
+        for c in all_cells(&map) {
+            let mut clear = grid.state(c) == CellState::Free;
+            for dy in -ri..=ri {
+                for dx in -ri..=ri {
+                    if f64::from(dx * dx + dy * dy) * res * res <= r * r + 1e-9
+                        && grid.state(c.offset(dx, dy)) == CellState::Occupied {
+                        clear = false;
+                    }
+                }
+            }
+            prop_assert_eq!(grid.is_traversable(c), clear, "cell {:?}", c);
+        }
+        let robot = *origins.last().unwrap();
+        let mut rebuilt = map.clone();
+        rebuilt.rebuild();
+        rebuilt.frontier_graph(&robot).unwrap();
+        let a: BTreeSet<Vec<Cell>> = map.graph().nodes().map(|n| n.cells.clone()).collect();
+        let b: BTreeSet<Vec<Cell>> = rebuilt.graph().nodes().map(|n| n.cells.clone()).collect();
+        prop_assert_eq!(a, b);
+        let diff = cost_diff(&map, &rebuilt);
+        prop_assert!(diff.is_empty(), "{:?}", diff);
+        let json = serde_json::to_string(&map).unwrap();
+        let back: FrontierMap = serde_json::from_str(&json).unwrap();
+        let restored: BTreeSet<Cell> = back.grid().contacts().collect();
+        prop_assert_eq!(restored, expected);
+    }
+}
+
+/// A glass wall across a corridor: the scans see through it (the far side
+/// is free), so paths cross it until the robot's contacts along the glass
+/// close the corridor; then none does, however often the far side is seen
+/// again.
+#[test]
+fn contacts_close_a_corridor_the_sensor_sees_through() {
+    let mut cfg = config();
+    cfg.grid.max_range = 4.0;
+    let mut map = FrontierMap::new(cfg).unwrap();
+    // A corridor 1 m wide along x, walls at y = 0 and y = 1.
+    let scan = || -> Vec<nalgebra::Point3<f64>> {
+        let mut pts = Vec::new();
+        for k in 0..60 {
+            let x = f64::from(k) * 0.1 + 0.05;
+            pts.push(nalgebra::Point3::new(x, -0.05, 0.5));
+            pts.push(nalgebra::Point3::new(x, 1.05, 0.5));
+            for j in 0..10 {
+                pts.push(nalgebra::Point3::new(x, f64::from(j) * 0.1 + 0.05, 0.0));
+            }
+        }
+        pts
+    };
+    map.update(&nalgebra::Point3::new(0.5, 0.5, 0.5), &scan())
+        .unwrap();
+    let (a, b) = (Point2::new(0.5, 0.5), Point2::new(3.5, 0.5));
+    assert!(map.path(&a, &b).unwrap().is_some(), "open corridor");
+    // Bumps along the glass at x = 2.5, heading +x, across the corridor:
+    // those within the robot radius of a wall (or of an earlier contact)
+    // are explained by it and not recorded.
+    let mut recorded = 0;
+    for (y, explained) in [
+        (0.05, true),
+        (0.25, false),
+        (0.3, true),
+        (0.45, false),
+        (0.65, false),
+        (0.85, false),
+        (0.95, true),
+    ] {
+        let stats = map
+            .contact(&nalgebra::Point3::new(2.2, y, 0.0), &Point2::new(2.45, y))
+            .unwrap();
+        assert_eq!(stats.is_none(), explained, "y {y}");
+        recorded += usize::from(stats.is_some());
+    }
+    for _ in 0..5 {
+        map.update(&nalgebra::Point3::new(0.5, 0.5, 0.5), &scan())
+            .unwrap();
+    }
+    assert!(map.path(&a, &b).unwrap().is_none(), "the contacts close it");
+    assert_eq!(map.grid().contacts().count(), recorded);
+    // A contact metres away is no contact; NaN is no position.
+    let feet = nalgebra::Point3::new(0.5, 0.5, 0.0);
+    assert!(matches!(
+        map.contact(&feet, &Point2::new(4.0, 0.5)),
+        Err(sornav_frontier_graph::FrontierError::ContactOutOfReach { .. })
+    ));
+    assert!(matches!(
+        map.contact(&feet, &Point2::new(f64::NAN, 0.5)),
+        Err(sornav_frontier_graph::FrontierError::NonFinite { .. })
+    ));
+    assert_eq!(map.grid().contacts().count(), recorded);
+}

@@ -523,6 +523,26 @@ impl Agent {
         self.frontiers.is_traversable(feet)
     }
 
+    /// The platform's word that a forward move from `feet` with heading
+    /// `yaw` (radians, counter-clockwise from +x) was stopped without
+    /// moving the robot, by something its sensor did not show (glass, an
+    /// edge with nothing visible beyond it, a bumper hit). The map takes an
+    /// obstacle one cell beyond the robot's radius along the heading, on
+    /// the level the robot stands on, and keeps it whatever later scans
+    /// show: paths are planned around it, and frontiers reached only
+    /// through it become unreachable instead of being dispatched again and
+    /// again. Returns whether it was recorded (not on a stair, where the
+    /// treads are not in a level's grid).
+    ///
+    /// # Errors
+    /// [`AgentError::Frontier`] for non-finite or out-of-range input.
+    pub fn on_contact(&mut self, feet: &Point3<f64>, yaw: f64) -> Result<bool, AgentError> {
+        let grid = &self.config.frontier.grid;
+        let reach = grid.robot_radius + grid.resolution;
+        let point = Point2::new(feet.x + reach * yaw.cos(), feet.y + reach * yaw.sin());
+        Ok(self.frontiers.contact(feet, &point)?.is_some())
+    }
+
     /// The current target.
     pub fn target(&self) -> Option<&Target> {
         self.target.as_ref().map(|t| &t.target)

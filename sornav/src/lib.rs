@@ -23,8 +23,9 @@
 //!   depth/semantic image with pinhole intrinsics, or a labelled
 //!   world-frame cloud), [`Agent::step`] at the control rate to get an
 //!   [`AgentCommand`] (dispatch a mission, continue, verify, STOP,
-//!   exhausted), and [`Agent::on_mission_outcome`] for what the platform
-//!   learns about a mission.
+//!   exhausted), [`Agent::on_mission_outcome`] for what the platform
+//!   learns about a mission, and [`Agent::on_contact`] when the robot was
+//!   stopped by something its sensor did not show.
 //! * **Introspection**: [`Agent::snapshot`] (maps, frontiers, clusters,
 //!   route, active mission, gate, last decision and its reason) and the
 //!   [`Decision`] log, all serde.

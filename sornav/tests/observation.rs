@@ -436,3 +436,32 @@ proptest! {
         prop_assert!(sb.objects.is_empty());
     }
 }
+
+/// A contact (a forward move stopped by something the camera did not
+/// show) puts an obstacle one cell beyond the robot's radius along its
+/// heading, which the robot can no longer stand on and later frames do not
+/// clear; a non-finite heading is a typed error and changes nothing.
+#[test]
+fn contacts_put_lasting_obstacles_on_the_map() {
+    let mut agent = agent();
+    let world = common::World {
+        blocks: vec![common::wall(3.0, -2.0, 3.2, 2.0)],
+    };
+    agent.observe(&world.observation(pose())).unwrap();
+    let ahead = Point3::new(0.5, 0.0, 0.0);
+    assert!(agent.is_traversable(&ahead), "free before the contact");
+    let feet = Point3::new(0.3, 0.0, 0.0);
+    assert!(matches!(
+        agent.on_contact(&feet, f64::NAN),
+        Err(AgentError::Frontier(_))
+    ));
+    assert!(agent.is_traversable(&ahead), "an error changes nothing");
+    assert!(agent.on_contact(&feet, 0.0).unwrap());
+    for _ in 0..5 {
+        agent.observe(&world.observation(pose())).unwrap();
+    }
+    assert!(
+        !agent.is_traversable(&ahead),
+        "the contact stays an obstacle"
+    );
+}
