@@ -439,7 +439,7 @@ impl OccupancyGrid {
         delta
     }
 
-    /// The contact cells ([`Self::contact`]), in cell order.
+    /// The contact cells ([`crate::FrontierMap::contact`]), in cell order.
     pub fn contacts(&self) -> impl ExactSizeIterator<Item = Cell> + '_ {
         self.contacts.iter().copied()
     }
