@@ -907,6 +907,17 @@ mod tests {
         }
     }
 
+    /// The stairs extracted from one scan of `points` seen from `eye` (a
+    /// 0.1 m surface map, a single level at 0).
+    fn extract_seen(eye: &Point3<f64>, points: &[Point3<f64>], p: &Params) -> Extraction {
+        let mut map = SurfaceMap::new(0.1);
+        map.integrate(eye, points, 10.0);
+        let mut off = OffLevelColumns::default();
+        let touched = map.take_touched();
+        off.update(&map, &touched, &[0.0], p);
+        extract(&map, &mut off, &[0.0], p)
+    }
+
     proptest! {
         /// Updating the off-level columns from the touched columns after
         /// every batch of returns gives the set a scan of every column
@@ -950,7 +961,6 @@ mod tests {
     fn a_flight_seen_from_its_side_is_sighted() {
         let p = params();
         let side_view = |treads: usize| {
-            let mut map = SurfaceMap::new(0.1);
             let mut points = Vec::new();
             for kx in 0..30 {
                 for ky in 0..50 {
@@ -969,11 +979,7 @@ mod tests {
                     points.push(Point3::new(x, y, z));
                 }
             }
-            map.integrate(&Point3::new(1.5, 2.5, 6.0), &points, 10.0);
-            let mut off = OffLevelColumns::default();
-            let touched = map.take_touched();
-            off.update(&map, &touched, &[0.0], &p);
-            extract(&map, &mut off, &[0.0], &p)
+            extract_seen(&Point3::new(1.5, 2.5, 6.0), &points, &p)
         };
         let found = side_view(8);
         assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
@@ -996,7 +1002,6 @@ mod tests {
                 column_rise,
                 ..params()
             };
-            let mut map = SurfaceMap::new(0.1);
             let mut points = Vec::new();
             for kx in 0..30 {
                 for ky in 0..175 {
@@ -1013,11 +1018,7 @@ mod tests {
                     points.push(Point3::new(x, y, z));
                 }
             }
-            map.integrate(&Point3::new(1.5, 0.5, 6.0), &points, 10.0);
-            let mut off = OffLevelColumns::default();
-            let touched = map.take_touched();
-            off.update(&map, &touched, &[0.0], &p);
-            let found = extract(&map, &mut off, &[0.0], &p);
+            let found = extract_seen(&Point3::new(1.5, 0.5, 6.0), &points, &p);
             found
                 .stairs
                 .iter()
@@ -1037,7 +1038,6 @@ mod tests {
     #[test]
     fn a_stair_entered_beside_a_door_jamb_starts_at_its_first_tread() {
         let p = params();
-        let mut map = SurfaceMap::new(0.1);
         let mut points = Vec::new();
         for kx in 5..22 {
             for ky in 0..20 {
@@ -1056,11 +1056,7 @@ mod tests {
                 points.push(Point3::new(x, y, z));
             }
         }
-        map.integrate(&Point3::new(1.3, 0.5, 6.0), &points, 10.0);
-        let mut off = OffLevelColumns::default();
-        let touched = map.take_touched();
-        off.update(&map, &touched, &[0.0], &p);
-        let found = extract(&map, &mut off, &[0.0], &p);
+        let found = extract_seen(&Point3::new(1.3, 0.5, 6.0), &points, &p);
         assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
         let s = &found.stairs[0];
         assert_eq!(s.lower.level, Some(LevelId(0)));
@@ -1080,7 +1076,6 @@ mod tests {
     #[test]
     fn furniture_tops_rising_beside_each_other_are_not_a_stair() {
         let p = params();
-        let mut map = SurfaceMap::new(0.1);
         let mut points = Vec::new();
         for kx in 0..40 {
             for ky in 0..30 {
@@ -1099,11 +1094,7 @@ mod tests {
                 points.push(Point3::new(x, y, z));
             }
         }
-        map.integrate(&Point3::new(0.5, 0.5, 6.0), &points, 10.0);
-        let mut off = OffLevelColumns::default();
-        let touched = map.take_touched();
-        off.update(&map, &touched, &[0.0], &p);
-        let found = extract(&map, &mut off, &[0.0], &p);
+        let found = extract_seen(&Point3::new(0.5, 0.5, 6.0), &points, &p);
         assert!(found.stairs.is_empty(), "{:?}", found.stairs);
     }
 }

@@ -24,6 +24,26 @@ fn all_cells(map: &FrontierMap) -> Vec<Cell> {
 
 /// Edge costs keyed by the nodes' cell sets (ids differ between maps).
 /// Differences between the two cost maps (first few), empty when equal.
+/// Brute-force reference of traversability: a cell is traversable exactly
+/// when it is free and no occupied cell lies within the robot radius.
+fn check_traversability(map: &FrontierMap) -> Result<(), TestCaseError> {
+    let grid = map.grid();
+    let res = grid.resolution();
+    let r = map.config().grid.robot_radius;
+    let ri = (r / res).ceil() as i32;
+    for c in all_cells(map) {
+        let blocked = (-ri..=ri).any(|dy| {
+            (-ri..=ri).any(|dx| {
+                f64::from(dx * dx + dy * dy) * res * res <= r * r + 1e-9
+                    && grid.state(c.offset(dx, dy)) == CellState::Occupied
+            })
+        });
+        let clear = grid.state(c) == CellState::Free && !blocked;
+        prop_assert_eq!(grid.is_traversable(c), clear, "cell {:?}", c);
+    }
+    Ok(())
+}
+
 fn cost_diff(a: &FrontierMap, b: &FrontierMap) -> Vec<String> {
     let (ca, cb) = (costs_by_cells(a), costs_by_cells(b));
     let keys: BTreeSet<_> = ca.keys().chain(cb.keys()).cloned().collect();
@@ -73,20 +93,7 @@ proptest! {
         let res = grid.resolution();
 
         // Traversability = free and no occupied cell within the robot radius.
-        let r = map.config().grid.robot_radius;
-        let ri = (r / res).ceil() as i32;
-        for c in all_cells(&map) {
-            let mut clear = grid.state(c) == CellState::Free;
-            for dy in -ri..=ri {
-                for dx in -ri..=ri {
-                    if f64::from(dx * dx + dy * dy) * res * res <= r * r + 1e-9
-                        && grid.state(c.offset(dx, dy)) == CellState::Occupied {
-                        clear = false;
-                    }
-                }
-            }
-            prop_assert_eq!(grid.is_traversable(c), clear, "cell {:?}", c);
-        }
+        check_traversability(&map)?;
 
         // Frontier cells: exactly the cells satisfying the definition.
         let reported: BTreeSet<Cell> = map.frontier_cells().collect();
@@ -339,7 +346,6 @@ proptest! {
     ) {
         prop_assume!(!origins.is_empty());
         let mut map = FrontierMap::new(config()).unwrap();
-        let res = map.config().grid.resolution;
         let mut expected = BTreeSet::new();
         for (k, o) in origins.iter().enumerate() {
             let pts = world.scan(*o, 120, map.config().grid.max_range);
@@ -359,20 +365,7 @@ proptest! {
         for &c in &expected {
             prop_assert_eq!(grid.state(c), CellState::Occupied, "contact {:?}", c);
         }
-        let r = map.config().grid.robot_radius;
-        let ri = (r / res).ceil() as i32;
-        for c in all_cells(&map) {
-            let mut clear = grid.state(c) == CellState::Free;
-            for dy in -ri..=ri {
-                for dx in -ri..=ri {
-                    if f64::from(dx * dx + dy * dy) * res * res <= r * r + 1e-9
-                        && grid.state(c.offset(dx, dy)) == CellState::Occupied {
-                        clear = false;
-                    }
-                }
-            }
-            prop_assert_eq!(grid.is_traversable(c), clear, "cell {:?}", c);
-        }
+        check_traversability(&map)?;
         let robot = *origins.last().unwrap();
         let mut rebuilt = map.clone();
         rebuilt.rebuild();

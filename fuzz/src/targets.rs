@@ -206,12 +206,7 @@ pub fn self_tests() -> Vec<Target> {
             if armed(b) {
                 // 8 GiB, written: beyond the worker's address-space bound
                 // (the allocation fails and the worker aborts).
-                let v = vec![1u8; 1 << 33];
-                return if v[v.len() / 2] == 1 {
-                    Ok(())
-                } else {
-                    Err("?".into())
-                };
+                return allocate_and_touch(1 << 33);
             }
             Err("fine".into())
         }),
@@ -219,12 +214,7 @@ pub fn self_tests() -> Vec<Target> {
             if armed(b) {
                 // 256 MiB, written: over a 128 MiB resident bound, under
                 // the 512 MiB address-space cap that goes with it.
-                let v = vec![1u8; 256 << 20];
-                return if v[v.len() / 2] == 1 {
-                    Ok(())
-                } else {
-                    Err("?".into())
-                };
+                return allocate_and_touch(256 << 20);
             }
             Err("fine".into())
         }),
@@ -235,6 +225,17 @@ pub fn self_tests() -> Vec<Target> {
             Err("fine".into())
         }),
     ]
+}
+
+/// Allocates `bytes` bytes, all written (resident), for the memory
+/// self-tests; reads one back so the allocation is not optimised away.
+fn allocate_and_touch(bytes: usize) -> Outcome {
+    let v = vec![1u8; bytes];
+    if v[v.len() / 2] == 1 {
+        Ok(())
+    } else {
+        Err("?".into())
+    }
 }
 
 const JSON_DICT: &[&[u8]] = &[
