@@ -41,7 +41,12 @@
 //!    level's tolerance is an open end (a flight seen from its side shows
 //!    its treads' edges step by step, but the footprint test passes only
 //!    on the first treads, whose tops the camera sees; standing there
-//!    shows the rest). A
+//!    shows the rest). The reach also counts the flight beyond unobserved
+//!    columns: a flight seen from its foot shows its first treads, the
+//!    rest hides behind their risers, and what was seen of it from
+//!    elsewhere is a separate component; a surface within 2 m of a top
+//!    tread bordering unobserved columns, with nothing seen on the line
+//!    between and at most 45° above it, counts. A
 //!    sheer drop is never step-connected, so it stays an obstacle; furniture
 //!    tops are not attached (their edge is higher than a step).
 //! 5. Inside attached components, a flat area of walkable nodes (wall
@@ -556,7 +561,7 @@ pub(crate) fn extract(
         off_columns.last = Some(table);
         return Extraction::default();
     }
-    let nodes = Nodes {
+    let mut nodes = Nodes {
         levels,
         p,
         off: &off,
@@ -586,6 +591,38 @@ pub(crate) fn extract(
     let mut comp_feet: BTreeMap<usize, Vec<Foot>> = BTreeMap::new();
     for f in feet {
         comp_feet.entry(uf.find(f.0)).or_default().push(f);
+    }
+    // 2b. How far each attached component's flight is sighted across
+    // unobserved columns (only where its own surfaces fall short).
+    let mut sighted: FxHashMap<usize, (f32, f32)> = FxHashMap::default();
+    for (root, members) in &comps {
+        let Some(cf) = comp_feet.get(root) else {
+            continue;
+        };
+        let (lo, hi) = members
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &i| {
+                (a.min(off[i].1), b.max(off[i].1))
+            });
+        let (lowest, highest) = cf
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), f| {
+                (a.min(levels[f.1]), b.max(levels[f.1]))
+            });
+        let up = f64::from(hi) - lowest < p.min_sighting_rise;
+        let down = highest - f64::from(lo) < p.min_sighting_rise;
+        if up || down {
+            let ext = gap_sighting(
+                &mut nodes.table,
+                map,
+                &off,
+                members,
+                p,
+                (lo, hi),
+                (up, down),
+            );
+            sighted.insert(*root, ext);
+        }
     }
     // 3. Walkable nodes (footprint supported).
     let disk: Vec<(i32, i32)> = (-ri..=ri)
@@ -667,6 +704,9 @@ pub(crate) fn extract(
             .first()
             .zip(zs.last())
             .map_or((0.0, 0.0), |(a, b)| (f64::from(*a), f64::from(*b)));
+        let (lo, hi) = sighted.get(root).map_or((lo, hi), |&(l, h)| {
+            (lo.min(f64::from(l)), hi.max(f64::from(h)))
+        });
         let run = |start: usize, goal: Option<usize>, dir: f32| {
             let reach = if dir > 0.0 {
                 hi - levels[start]
@@ -706,6 +746,121 @@ pub(crate) fn extract(
             .partial_cmp(&(b.lower.position.x, b.lower.position.y, b.lower.position.z))
             .unwrap_or(std::cmp::Ordering::Equal)
     });
+    out
+}
+
+/// Steepest rise per metre (45°) of a flight sighted across unobserved
+/// columns.
+const GAP_SLOPE: f32 = 1.0;
+/// Farthest (m) a flight's continuation is looked for across unobserved
+/// columns.
+const GAP_REACH_M: f64 = 2.0;
+/// At most this many nodes per component and direction start the
+/// sighting: its highest (lowest) treads that border unobserved columns.
+const GAP_SOURCES: usize = 16;
+
+/// The lowest and highest surfaces that the flight of one component
+/// (`members`, whose own surfaces span `(lo, hi)`) reaches across
+/// unobserved columns, looking up and/or down as `dirs` says.
+///
+/// A flight seen from its foot shows its first treads; the treads beyond
+/// them are hidden by their own risers (from a camera at knee height) and
+/// the turn of a winding stair, while parts of the flight further on, seen
+/// from elsewhere, are separate components. From a tread at the
+/// component's top (bottom) that borders a column without surfaces, a
+/// surface of another off-level node within [`GAP_REACH_M`] counts as the
+/// same flight when every column on the straight line between them holds
+/// no surface (nothing seen there) and it rises (descends) at most
+/// [`GAP_SLOPE`] per metre plus a step. The result only decides whether the
+/// component is a *sighted* flight whose highest walkable tread is an open
+/// end: standing there shows whether it is one. Furniture beside a low
+/// attached surface is rarely behind unobserved columns only, and a visit
+/// resolves it (the columns between get observed).
+///
+/// Every column it reads is looked up in `table`, so that the skip of
+/// unchanged extractions notices when they change.
+///
+/// # Complexity
+/// O(s (g + n) + s c g) for s ≤ [`GAP_SOURCES`] sources per direction, g
+/// = the reach in columns, n off-level nodes within it and c candidates
+/// that would extend the reach (each checks a line of ≤ g columns);
+/// O(log N) per column row for the N off-level nodes.
+fn gap_sighting(
+    table: &mut ColumnTable,
+    map: &SurfaceMap,
+    off: &[(ColumnKey, f32)],
+    members: &[usize],
+    p: &Params,
+    (lo, hi): (f32, f32),
+    (up, down): (bool, bool),
+) -> (f32, f32) {
+    let res = map.resolution;
+    // The reach in columns is small: at most 2 m at ≥ 0.02 m columns.
+    #[allow(clippy::cast_possible_truncation)]
+    let g = (GAP_REACH_M / res).ceil() as i32;
+    let empty = |t: &mut ColumnTable, k: ColumnKey| {
+        t.fill(k, map, p.clearance);
+        t.surfaces(k).is_empty()
+    };
+    let mut out = (lo, hi);
+    for (dir, wanted) in [(1.0_f32, up), (-1.0, down)] {
+        if !wanted {
+            continue;
+        }
+        let edge = if dir > 0.0 { hi } else { lo };
+        let mut sources: Vec<(ColumnKey, f32)> = members
+            .iter()
+            .map(|&i| off[i])
+            .filter(|&(_, z)| (edge - z) * dir <= p.step)
+            .filter(|&(k, _)| {
+                DIRS8
+                    .into_iter()
+                    .any(|(dx, dy)| empty(table, (k.0 + dx, k.1 + dy)))
+            })
+            .collect();
+        sources.sort_by(|a, b| (b.1 * dir).total_cmp(&(a.1 * dir)).then(a.0.cmp(&b.0)));
+        sources.truncate(GAP_SOURCES);
+        let mut best = edge;
+        for (k, z) in sources {
+            for dx in -g..=g {
+                let x = k.0 + dx;
+                let a = off.partition_point(|c| c.0 < (x, k.1 - g));
+                let b = off.partition_point(|c| c.0 <= (x, k.1 + g));
+                for &(k2, z2) in &off[a..b] {
+                    let rise = (z2 - z) * dir;
+                    if (z2 - best) * dir <= 0.0 || rise <= 0.0 {
+                        continue;
+                    }
+                    let (ddx, ddy) = (k2.0 - k.0, k2.1 - k.1);
+                    let n = ddx.abs().max(ddy.abs());
+                    let d = res * f64::from(ddx * ddx + ddy * ddy).sqrt();
+                    #[allow(clippy::cast_possible_truncation)]
+                    let max_rise = GAP_SLOPE * d as f32 + p.step;
+                    if n < 2 || d > GAP_REACH_M || rise > max_rise {
+                        continue;
+                    }
+                    let unseen_between = (1..n).all(|t| {
+                        let f = f64::from(t) / f64::from(n);
+                        // Between two columns: rounding stays in i32.
+                        #[allow(clippy::cast_possible_truncation)]
+                        let c = (
+                            k.0 + (f64::from(ddx) * f).round() as i32,
+                            k.1 + (f64::from(ddy) * f).round() as i32,
+                        );
+                        empty(table, c)
+                    });
+                    if unseen_between {
+                        best = z2;
+                    }
+                }
+            }
+        }
+        if dir > 0.0 {
+            out.1 = best;
+        } else {
+            out.0 = best;
+        }
+    }
     out
 }
 
@@ -1066,6 +1221,57 @@ mod tests {
         assert!((s.path[1].z - 0.11).abs() < 1e-4, "{:?}", s.path);
         let open = s.open_end().expect("a partly seen stair");
         assert!((open.position.z - 1.1).abs() < 1e-4, "{:?}", open.position);
+    }
+
+    /// A flight seen from its foot (the trace of a Sweet Home 3D basement):
+    /// a camera at knee height sees the first two treads (0.11 and 0.22 m),
+    /// not the treads behind their risers; the flight further on (two
+    /// treads 0.7 m away, seen from elsewhere) is a separate component.
+    /// Across the unobserved columns between them it is a sighted flight,
+    /// whose open end is the second tread. When the columns between were
+    /// seen (floor, say), or the far surface is steeper than a stair, it is
+    /// not.
+    #[test]
+    fn a_flight_seen_from_its_foot_is_sighted_across_unobserved_columns() {
+        let p = params();
+        let foot_view = |gap: Option<f64>, far: f64| {
+            let mut points = Vec::new();
+            for kx in 5..22 {
+                for ky in 0..20 {
+                    let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                    let z = if ky < 10 {
+                        0.0
+                    } else if kx == 9 || kx == 17 {
+                        2.5 // the stairwell's walls
+                    } else if !(10..17).contains(&kx) {
+                        continue;
+                    } else if ky < 12 {
+                        0.11 * f64::from(ky - 9)
+                    } else if ky < 17 {
+                        match gap {
+                            Some(z) => z,
+                            None => continue,
+                        }
+                    } else if ky < 19 {
+                        far + 0.11 * f64::from(ky - 17)
+                    } else {
+                        continue;
+                    };
+                    points.push(Point3::new(x, y, z));
+                }
+            }
+            extract_seen(&Point3::new(1.3, 0.5, 6.0), &points, &p).stairs
+        };
+        let stairs = foot_view(None, 0.88);
+        assert_eq!(stairs.len(), 1, "{stairs:?}");
+        assert_eq!(stairs[0].lower.level, Some(LevelId(0)));
+        let open = stairs[0].open_end().expect("a partly seen stair");
+        assert!((open.position.z - 0.22).abs() < 1e-4, "{:?}", open.position);
+        assert!(open.position.y > 1.1 && open.position.y < 1.2, "{open:?}");
+        // the columns between seen: a low step, then a table
+        assert!(foot_view(Some(0.0), 0.88).is_empty());
+        // steeper than 45° across the gap: a shelf behind a step
+        assert!(foot_view(None, 1.6).is_empty());
     }
 
     /// Furniture beside furniture (the trace of a Sweet Home 3D kitchen): a
