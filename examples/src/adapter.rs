@@ -108,13 +108,17 @@ impl Default for AdapterConfig {
 ///   within 0.1 m of a view point, a pose within 1 m of the object from
 ///   which the object is visible in the camera's vertical field of view;
 /// * frontier viewpoints reached within 0.5 m (the camera does not see the
-///   floor within 1.5 m of the robot).
+///   floor within 1.5 m of the robot);
+/// * missing depth where the floor would be in range is no floor: the
+///   simulated camera returns every surface within its range, so a floor
+///   edge over nothing (a terrace, a mezzanine) is an edge.
 pub fn sim_agent_config() -> AgentConfig {
     let mut c = AgentConfig::default();
     c.approach.min_standoff_m = 0.4;
     c.approach.standoff_m = 0.7;
     c.executor.nav_to_object.arrival.radius_m = 0.3;
     c.executor.explore.arrival.radius_m = 0.5;
+    c.voids_from_missing_depth = true;
     c
 }
 

@@ -543,7 +543,31 @@ impl MultiLevelMap {
         origin: &Point3<f64>,
         points: &[Point3<f64>],
     ) -> Result<UpdateStats, FrontierError> {
+        self.update_with_voids(feet, origin, points, &[])
+    }
+
+    /// As [`update`](Self::update), plus the scan's voids (see
+    /// [`FrontierMap::update_with_voids`]): positions where a ray crossed
+    /// the floor the robot stands on within range and returned nothing.
+    /// They go to the occupancy grid of the robot's level as drop-offs,
+    /// never to the surface map (they are not surfaces), and are ignored
+    /// while the robot stands on no level.
+    ///
+    /// # Errors
+    /// As [`update`](Self::update), and for a non-finite or out-of-range
+    /// void; nothing is modified then.
+    ///
+    /// # Complexity
+    /// That of [`update`](Self::update) for P + V returns on the grid.
+    pub fn update_with_voids(
+        &mut self,
+        feet: &Point3<f64>,
+        origin: &Point3<f64>,
+        points: &[Point3<f64>],
+        voids: &[Point2<f64>],
+    ) -> Result<UpdateStats, FrontierError> {
         let res = self.cfg.grid.resolution;
+        crate::map::check_voids(voids, res)?;
         Self::check(feet, "pose", res)?;
         Self::check(origin, "origin", res)?;
         for (index, p) in points.iter().enumerate() {
@@ -557,7 +581,7 @@ impl MultiLevelMap {
         }
         self.ensure_first_level(feet)?;
         if !self.cfg.levels.allow_stairs {
-            let stats = self.maps[0].update(origin, points)?;
+            let stats = self.maps[0].update_with_voids(origin, points, voids)?;
             if self.cfg.levels.detect_stairs {
                 self.surfaces
                     .integrate(origin, points, self.cfg.grid.max_range);
@@ -584,7 +608,7 @@ impl MultiLevelMap {
             }
         };
         let stats = match level {
-            Some(l) => self.maps[usize::from(l.0)].update(origin, points)?,
+            Some(l) => self.maps[usize::from(l.0)].update_with_voids(origin, points, voids)?,
             None => UpdateStats::default(),
         };
         if level.is_some() {

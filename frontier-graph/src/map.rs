@@ -276,6 +276,43 @@ impl FrontierMap {
         Ok(self.apply(&delta))
     }
 
+    /// As [`update`](Self::update), plus *voids*: horizontal positions
+    /// where a sensor ray crossed the floor's height within the sensor's
+    /// range and returned nothing, so that no floor is there (the edge of a
+    /// terrace or mezzanine with nothing below in range, a hole in a
+    /// mesh). Each void is a drop-off: the cells on the 2D ray from the
+    /// origin are misses, its cell a hit, exactly as for a return deeper
+    /// than `drop_off_depth` below the floor at that position (beyond
+    /// `max_range`: misses up to the range, no hit). Without voids a floor
+    /// edge over nothing stays a frontier for ever: nothing the sensor can
+    /// return ever shows what is beyond it.
+    ///
+    /// # Errors
+    /// As [`update`](Self::update); a non-finite or out-of-range void is
+    /// [`FrontierError::NonFinite`] / [`FrontierError::OutOfRange`] with
+    /// `what = "void"`. Nothing is modified then.
+    ///
+    /// # Complexity
+    /// That of [`update`](Self::update) for P + V returns.
+    pub fn update_with_voids(
+        &mut self,
+        origin: &Point3<f64>,
+        points: &[Point3<f64>],
+        voids: &[Point2<f64>],
+    ) -> Result<UpdateStats, FrontierError> {
+        if voids.is_empty() {
+            return self.update(origin, points);
+        }
+        check_voids(voids, self.grid.resolution())?;
+        // A return just below the drop-off depth at the void's position.
+        let g = &self.cfg.grid;
+        let z = g.floor_z - g.drop_off_depth - 0.01;
+        let mut all = Vec::with_capacity(points.len() + voids.len());
+        all.extend_from_slice(points);
+        all.extend(voids.iter().map(|v| Point3::new(v.x, v.y, z)));
+        self.update(origin, &all)
+    }
+
     /// Records a contact: the robot standing at `feet` was stopped by an
     /// obstacle at `point` (horizontal position) that its sensor did not
     /// show (glass, an edge with nothing visible beyond it). The point's
@@ -1008,4 +1045,22 @@ pub fn path_cells(path: &[Point3<f64>], resolution: f64) -> impl Iterator<Item =
         let n = (b.x - a.x).abs().max((b.y - a.y).abs());
         (1..=n).map(move |k| a.offset(dx * k, dy * k))
     }))
+}
+
+/// Checks that every void is finite and addressable at resolution `res`.
+///
+/// # Errors
+/// [`FrontierError::NonFinite`] / [`FrontierError::OutOfRange`] with
+/// `what = "void"` and the first bad void's index.
+pub(crate) fn check_voids(voids: &[Point2<f64>], res: f64) -> Result<(), FrontierError> {
+    for (index, v) in voids.iter().enumerate() {
+        if !(v.x.is_finite() && v.y.is_finite()) {
+            return Err(FrontierError::NonFinite {
+                what: "void",
+                index,
+            });
+        }
+        cell_of(v, res, "void", index)?;
+    }
+    Ok(())
 }

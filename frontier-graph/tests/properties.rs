@@ -445,3 +445,74 @@ fn contacts_close_a_corridor_the_sensor_sees_through() {
     ));
     assert_eq!(map.grid().contacts().count(), recorded);
 }
+
+/// A floor platform over nothing (a terrace with no ground modelled beyond
+/// it): the scans return its floor and nothing past the edge, so the edge
+/// borders unknown cells that no return will ever show — a frontier for
+/// ever. The voids of the rays that crossed the floor's height past the
+/// edge make it an edge: the cells beyond are drop-offs and no frontier is
+/// left there. A non-finite void is refused and changes nothing.
+#[test]
+fn voids_make_a_floor_edge_over_nothing_an_edge() {
+    let floor = || -> Vec<nalgebra::Point3<f64>> {
+        let mut pts = Vec::new();
+        for kx in 0..30 {
+            for ky in 0..20 {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                pts.push(nalgebra::Point3::new(x, y, 0.0));
+            }
+        }
+        pts
+    };
+    let voids: Vec<Point2<f64>> = (0..20)
+        .flat_map(|ky| (0..8).map(move |kx| (kx, ky)))
+        .map(|(kx, ky)| Point2::new(3.05 + f64::from(kx) * 0.1, f64::from(ky) * 0.1 + 0.05))
+        .collect();
+    let origin = nalgebra::Point3::new(0.5, 1.0, 0.88);
+    let mut cfg = config();
+    cfg.grid.max_range = 5.0;
+    let beyond = |map: &FrontierMap| {
+        map.frontier_cells()
+            .filter(|c| {
+                let (x, y) = (
+                    f64::from(c.x) * cfg.grid.resolution,
+                    f64::from(c.y) * cfg.grid.resolution,
+                );
+                x > 2.5 && (0.3..1.7).contains(&y)
+            })
+            .count()
+    };
+    let states = |map: &FrontierMap| -> Vec<CellState> {
+        all_cells(map)
+            .into_iter()
+            .map(|c| map.grid().state(c))
+            .collect()
+    };
+
+    let mut plain = FrontierMap::new(cfg.clone()).unwrap();
+    plain.update(&origin, &floor()).unwrap();
+    assert!(beyond(&plain) > 0, "the edge is a frontier without voids");
+
+    let mut map = FrontierMap::new(cfg.clone()).unwrap();
+    map.update_with_voids(&origin, &floor(), &voids).unwrap();
+    assert_eq!(beyond(&map), 0, "the edge is an edge with voids");
+    for v in &voids {
+        let c = map.grid().cell_of(v).unwrap();
+        assert_eq!(map.grid().state(c), CellState::Occupied, "void {v:?}");
+    }
+    // The same as returns below the drop-off depth at the voids.
+    let mut reference = FrontierMap::new(cfg.clone()).unwrap();
+    let mut pts = floor();
+    let drop = cfg.grid.floor_z - cfg.grid.drop_off_depth - 0.01;
+    pts.extend(voids.iter().map(|v| nalgebra::Point3::new(v.x, v.y, drop)));
+    reference.update(&origin, &pts).unwrap();
+    assert_eq!(states(&reference), states(&map));
+
+    let before = states(&map);
+    let bad = [Point2::new(f64::NAN, 1.0)];
+    assert!(matches!(
+        map.update_with_voids(&origin, &floor(), &bad),
+        Err(sornav_frontier_graph::FrontierError::NonFinite { what: "void", .. })
+    ));
+    assert_eq!(states(&map), before);
+}

@@ -647,10 +647,21 @@ impl Agent {
             self.config.frontier.grid.resolution,
             &mut points,
         );
-        let update = match self
-            .frontiers
-            .update(&observation.pose.position, &origin, &points)
-        {
+        let voids = if self.config.voids_from_missing_depth {
+            observation.void_points(
+                &self.config.depth,
+                self.config.occupancy_max_columns,
+                observation.pose.position.z,
+            )
+        } else {
+            Vec::new()
+        };
+        let update = match self.frontiers.update_with_voids(
+            &observation.pose.position,
+            &origin,
+            &points,
+            &voids,
+        ) {
             Ok(u) => u,
             Err(e) => {
                 self.stats.refused_observations += 1;
@@ -675,6 +686,7 @@ impl Agent {
         let mut report = ObservationReport {
             occupancy_points: sensor_points,
             footprint_points: points.len() as u64 - sensor_points,
+            void_points: voids.len() as u64,
             occupancy_rejected,
             objects: self.semantic.cluster_count(),
             frontiers_added: update.frontiers_added,

@@ -243,6 +243,15 @@ pub struct AgentConfig {
     /// many columns (same stride in rows; default 160, 0 = every pixel).
     /// The semantic map still uses every `depth.stride`-th pixel.
     pub occupancy_max_columns: u32,
+    /// Depth pixels without a return whose ray would have met the floor
+    /// within the depth window mark *no floor* there (a drop-off in the
+    /// occupancy grid; see [`Observation::void_points`](crate::Observation::void_points)).
+    /// Right for a simulator's camera, which returns every surface in
+    /// range: the edge of a terrace or a mezzanine over nothing is then an
+    /// edge, not a frontier the robot visits for ever. Off by default: a
+    /// real stereo or time-of-flight camera also misses shiny, dark or
+    /// textureless floors, which would read as holes.
+    pub voids_from_missing_depth: bool,
 }
 
 impl Default for AgentConfig {
@@ -266,6 +275,7 @@ impl Default for AgentConfig {
             commitment: CommitmentConfig::default(),
             footprint_free_radius_m: 0.18,
             occupancy_max_columns: 160,
+            voids_from_missing_depth: false,
         }
     }
 }

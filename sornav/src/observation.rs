@@ -1,6 +1,6 @@
 //! What the platform tells the agent: the robot pose and one sensor frame.
 
-use nalgebra::{Isometry3, Point3};
+use nalgebra::{Isometry3, Point2, Point3};
 use serde::{Deserialize, Serialize};
 use sornav_executor::RobotPose;
 use sornav_semantic_map::{DepthOptions, LabelId, LabeledPoint, PinholeCamera};
@@ -83,6 +83,9 @@ pub struct ObservationReport {
     /// Free-floor points added under the robot's footprint
     /// ([`AgentConfig::footprint_free_radius_m`](crate::AgentConfig::footprint_free_radius_m)).
     pub footprint_points: u64,
+    /// Positions without floor given to the occupancy grid as drop-offs
+    /// ([`AgentConfig::voids_from_missing_depth`](crate::AgentConfig::voids_from_missing_depth)).
+    pub void_points: u64,
     /// Object clusters after the update.
     pub objects: usize,
     /// Clusters of the target category detected in this frame.
@@ -225,6 +228,70 @@ impl Observation {
         };
         (points, rejected)
     }
+
+    /// Where a depth frame shows *no floor* ("voids", for
+    /// `sornav_frontier_graph::MultiLevelMap::update_with_voids`): for each
+    /// pixel sampled as by [`occupancy_points`](Self::occupancy_points)
+    /// without a return (zero, NaN or infinite depth; a return nearer than
+    /// `min_depth` is a return), whose sampled 4-neighbours in the image have
+    /// none either, the point where its ray crosses the floor height
+    /// `floor_z`, when that crossing lies between `min_depth` and 90 % of
+    /// `max_depth` (z-depth): a floor there would have returned. An isolated
+    /// missing pixel (a dropped return) gives nothing. Point clouds and
+    /// occupancy returns have no voids (a cloud does not carry its misses).
+    ///
+    /// Sound only for a camera that returns every surface within
+    /// `max_depth` (a simulator's; a stereo camera also misses textureless
+    /// or shiny floors), hence
+    /// [`AgentConfig::voids_from_missing_depth`](crate::AgentConfig::voids_from_missing_depth).
+    ///
+    /// # Complexity
+    /// O(pixels / stride^2).
+    pub fn void_points(
+        &self,
+        options: &DepthOptions,
+        max_columns: u32,
+        floor_z: f64,
+    ) -> Vec<Point2<f64>> {
+        let Sensor::Depth(d) = &self.sensor else {
+            return Vec::new();
+        };
+        let stride = occupancy_stride(options.stride, d.camera.width, max_columns);
+        let (w, h) = (d.camera.width as usize, d.camera.height as usize);
+        let missing = |u: usize, v: usize| {
+            let z = d.depth[v * w + u];
+            !(z.is_finite() && z > 0.0)
+        };
+        let origin = d.camera_pose.translation.vector;
+        let far = 0.9 * options.max_depth;
+        let mut out = Vec::new();
+        for v in (0..h).step_by(stride) {
+            for u in (0..w).step_by(stride) {
+                let neighbours = [
+                    u.checked_sub(stride).map(|u| (u, v)),
+                    (u + stride < w).then_some((u + stride, v)),
+                    v.checked_sub(stride).map(|v| (u, v)),
+                    (v + stride < h).then_some((u, v + stride)),
+                ];
+                if !missing(u, v) || neighbours.iter().flatten().any(|&(a, b)| !missing(a, b)) {
+                    continue;
+                }
+                // The ray at z-depth 1: the crossing's parameter is its
+                // z-depth.
+                let ray =
+                    d.camera_pose.rotation * d.camera.back_project(u as f64, v as f64, 1.0).coords;
+                if ray.z >= 0.0 {
+                    continue;
+                }
+                let t = (floor_z - origin.z) / ray.z;
+                if t >= options.min_depth && t <= far {
+                    let p = origin + t * ray;
+                    out.push(Point2::new(p.x, p.y));
+                }
+            }
+        }
+        out
+    }
 }
 
 /// The pixel stride of a depth frame for the occupancy grid: the depth
@@ -252,6 +319,72 @@ mod tests {
         assert_eq!(occupancy_stride(1, 161, 160), 2);
         assert_eq!(occupancy_stride(3, 160, 160), 3);
         assert_eq!(occupancy_stride(0, 640, 0), 1);
+    }
+
+    /// A camera at 0.88 m, tilted down, over a floor that ends 2 m ahead
+    /// with nothing beyond (depth 0 there), one dropped return inside the
+    /// floor: the voids lie past the edge, within 90 % of the depth window,
+    /// and the dropped return gives none.
+    #[test]
+    fn voids_lie_past_a_floor_edge_over_nothing() {
+        let camera = PinholeCamera {
+            width: 64,
+            height: 48,
+            fx: 32.0,
+            fy: 32.0,
+            cx: 31.5,
+            cy: 23.5,
+        };
+        let eye = Point3::new(0.0, 0.0, 0.88);
+        let pose = sornav_semantic_map::optical_pose(&eye, 0.0, 0.3);
+        let mut depth = vec![0.0f32; 64 * 48];
+        for v in 0..48 {
+            for u in 0..64 {
+                let ray =
+                    pose.rotation * camera.back_project(f64::from(u), f64::from(v), 1.0).coords;
+                if ray.z < 0.0 {
+                    let t = -0.88 / ray.z;
+                    if ray.x * t < 2.0 {
+                        #[allow(clippy::cast_possible_truncation)]
+                        {
+                            depth[v as usize * 64 + u as usize] = t as f32;
+                        }
+                    }
+                }
+            }
+        }
+        // a dropped return in the middle of the floor
+        let dropped = 44 * 64 + 32;
+        assert!(depth[dropped] > 0.0);
+        depth[dropped] = 0.0;
+        let obs = Observation {
+            pose: RobotPose::new(Point3::new(0.0, 0.0, 0.0), 0.0),
+            sensor: Sensor::Depth(DepthObservation {
+                camera,
+                camera_pose: pose,
+                depth,
+                labels: vec![LabelId(0); 64 * 48],
+            }),
+        };
+        let options = DepthOptions::default();
+        let voids = obs.void_points(&options, 0, 0.0);
+        assert!(voids.len() > 20, "{}", voids.len());
+        for v in &voids {
+            let z_depth = (pose.inverse() * Point3::new(v.x, v.y, 0.0)).z;
+            assert!(
+                v.x > 2.0 && (0.5..=0.9 * 5.0 + 1e-9).contains(&z_depth),
+                "{v:?}"
+            );
+        }
+        // a cloud has no voids
+        let cloud = Observation {
+            pose: obs.pose,
+            sensor: Sensor::Occupancy(OccupancyObservation {
+                origin: eye,
+                points: vec![Point3::new(1.0, 0.0, 0.0)],
+            }),
+        };
+        assert!(cloud.void_points(&options, 0, 0.0).is_empty());
     }
 
     proptest! {
