@@ -707,6 +707,7 @@ pub(crate) fn extract(
         let (lo, hi) = sighted.get(root).map_or((lo, hi), |&(l, h)| {
             (lo.min(f64::from(l)), hi.max(f64::from(h)))
         });
+        let depth = edge_depth(&off, &walk, &nodes);
         let run = |start: usize, goal: Option<usize>, dir: f32| {
             let reach = if dir > 0.0 {
                 hi - levels[start]
@@ -720,7 +721,7 @@ pub(crate) fn extract(
                 p.min_stair_rise
             };
             chain(
-                &off, &walk, &nodes, cf, levels, start, goal, dir, map, min_rise,
+                &off, &walk, &depth, &nodes, cf, levels, start, goal, dir, map, min_rise,
             )
         };
         for w in attached.windows(2) {
@@ -876,6 +877,88 @@ fn point(map: &SurfaceMap, k: ColumnKey, z: f64) -> Point3<f64> {
     Point3::new(x, y, z)
 }
 
+/// Walkable nodes this many columns or more from the edge of a flight's
+/// walkable part cost nothing extra to cross; nearer ones cost
+/// [`EDGE_COST_M`] per column short of it.
+const EDGE_DEPTH: u8 = 3;
+/// Extra path cost (m) per column a walkable node lies nearer than
+/// [`EDGE_DEPTH`] to the edge of its flight's walkable part.
+const EDGE_COST_M: f64 = 0.15;
+
+/// The walkable neighbours of walkable node `i`: step-connected, in the
+/// 8 directions (or two columns away across a column without surfaces),
+/// and the number of directions they come from.
+fn walkable_neighbours(
+    off: &[(ColumnKey, f32)],
+    walk: &FxHashMap<(ColumnKey, u32), usize>,
+    nodes: &Nodes<'_>,
+    i: usize,
+) -> (Vec<usize>, usize) {
+    let (k, z) = off[i];
+    let mut out = Vec::new();
+    let mut dirs = BTreeSet::new();
+    for (n, z2, kind) in nodes.linked(k) {
+        if let Kind::Off(j) = kind
+            && walk.contains_key(&(n, z2.to_bits()))
+            && nodes.step_connected(k, z, n, z2, kind)
+        {
+            out.push(j);
+            dirs.insert(((n.0 - k.0).signum(), (n.1 - k.1).signum()));
+        }
+    }
+    (out, dirs.len())
+}
+
+/// How many columns each walkable node of a component lies from the edge
+/// of the walkable part (0: a neighbour in some direction is not a
+/// walkable tread of the flight — a wall, a railing, the floor at its
+/// ends), up to [`EDGE_DEPTH`]; nodes deeper are left out. A path along
+/// a flight pays [`edge_penalty`] for hugging its edge: the chain's
+/// shortest path otherwise runs along the inner edge of every turn and
+/// along one side of a straight flight, where the walkable columns end at
+/// the robot's radius from the wall at column resolution, so that a
+/// robot following it scrapes the wall.
+///
+/// # Complexity
+/// O(W) step-connection tests for the W walkable nodes (a breadth-first
+/// search from the edge, stopped at [`EDGE_DEPTH`]).
+fn edge_depth(
+    off: &[(ColumnKey, f32)],
+    walk: &FxHashMap<(ColumnKey, u32), usize>,
+    nodes: &Nodes<'_>,
+) -> FxHashMap<usize, u8> {
+    let mut depth: FxHashMap<usize, u8> = FxHashMap::default();
+    let mut queue = std::collections::VecDeque::new();
+    let mut ids: Vec<usize> = walk.values().copied().collect();
+    ids.sort_unstable();
+    for i in ids {
+        if walkable_neighbours(off, walk, nodes, i).1 < DIRS8.len() {
+            depth.insert(i, 0);
+            queue.push_back(i);
+        }
+    }
+    while let Some(i) = queue.pop_front() {
+        let d = depth[&i];
+        if d + 1 >= EDGE_DEPTH {
+            continue;
+        }
+        for j in walkable_neighbours(off, walk, nodes, i).0 {
+            if let std::collections::hash_map::Entry::Vacant(e) = depth.entry(j) {
+                e.insert(d + 1);
+                queue.push_back(j);
+            }
+        }
+    }
+    depth
+}
+
+/// The extra cost of crossing walkable node `i` (see [`edge_depth`]).
+fn edge_penalty(depth: &FxHashMap<usize, u8>, i: usize) -> f64 {
+    depth.get(&i).map_or(0.0, |&d| {
+        EDGE_COST_M * f64::from(EDGE_DEPTH.saturating_sub(d))
+    })
+}
+
 /// Dijkstra over the walkable nodes of one component from the feet on
 /// `start` to the feet on `goal` (`None` when they are not joined), or,
 /// without a goal level, to the node farthest from `start` in the
@@ -884,6 +967,7 @@ fn point(map: &SurfaceMap, k: ColumnKey, z: f64) -> Point3<f64> {
 fn chain(
     off: &[(ColumnKey, f32)],
     walk: &FxHashMap<(ColumnKey, u32), usize>,
+    depth: &FxHashMap<usize, u8>,
     nodes: &Nodes<'_>,
     feet: &[Foot],
     levels: &[f64],
@@ -956,7 +1040,7 @@ fn chain(
             {
                 continue;
             }
-            let nd = d + (node_point(j) - node_point(i)).norm();
+            let nd = d + (node_point(j) - node_point(i)).norm() + edge_penalty(depth, j);
             if dist.get(&j).is_none_or(|&old| nd < old) {
                 dist.insert(j, nd);
                 parent.insert(j, Ok(i));
@@ -1272,6 +1356,38 @@ mod tests {
         assert!(foot_view(Some(0.0), 0.88).is_empty());
         // steeper than 45° across the gap: a shelf behind a step
         assert!(foot_view(None, 1.6).is_empty());
+    }
+
+    /// A straight flight 1 m wide between two walls: its path keeps to the
+    /// middle of the walkable treads (every tie of the shortest chain would
+    /// otherwise run along one side, where the walkable columns end at the
+    /// robot's radius from the wall at column resolution).
+    #[test]
+    fn a_flight_path_keeps_to_the_middle() {
+        let p = params();
+        let mut points = Vec::new();
+        for kx in 5..25 {
+            for ky in 0..40 {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                let z = if ky < 10 {
+                    0.0
+                } else if kx == 9 || kx == 20 {
+                    2.5 // the stairwell's walls
+                } else if (10..20).contains(&kx) {
+                    0.15 * (f64::from(ky - 10) / 2.5).floor() + 0.15
+                } else {
+                    continue;
+                };
+                points.push(Point3::new(x, y, z));
+            }
+        }
+        let found = extract_seen(&Point3::new(1.5, 0.5, 6.0), &points, &p);
+        assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
+        let path = &found.stairs[0].path;
+        assert!(path.len() > 10, "{path:?}");
+        for q in &path[1..path.len() - 1] {
+            assert!((1.3..=1.7).contains(&q.x), "{q:?} in {path:?}");
+        }
     }
 
     /// Furniture beside furniture (the trace of a Sweet Home 3D kitchen): a

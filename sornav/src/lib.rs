@@ -168,8 +168,8 @@ pub use config::{
 };
 pub use error::{AgentError, ConfigError, ObservationError};
 pub use observation::{
-    CloudObservation, DepthObservation, Observation, ObservationReport, OccupancyObservation,
-    Sensor, occupancy_stride,
+    CloudObservation, DepthObservation, FLOOR_EDGE_TOLERANCE_M, MIN_VOID_RUN_M, Observation,
+    ObservationReport, OccupancyObservation, Sensor, occupancy_stride,
 };
 pub use ordering::{OrderingKind, Route};
 pub use snapshot::{

@@ -230,19 +230,32 @@ impl Observation {
     }
 
     /// Where a depth frame shows *no floor* ("voids", for
-    /// `sornav_frontier_graph::MultiLevelMap::update_with_voids`): for each
-    /// pixel sampled as by [`occupancy_points`](Self::occupancy_points)
-    /// without a return (zero, NaN or infinite depth; a return nearer than
-    /// `min_depth` is a return), whose sampled 4-neighbours in the image have
-    /// none either, the point where its ray crosses the floor height
-    /// `floor_z`, when that crossing lies between `min_depth` and 90 % of
-    /// `max_depth` (z-depth): a floor there would have returned. An isolated
-    /// missing pixel (a dropped return) gives nothing. Point clouds and
-    /// occupancy returns have no voids (a cloud does not carry its misses).
+    /// `sornav_frontier_graph::MultiLevelMap::update_with_voids`): the
+    /// edge of a floor with nothing beyond it (a terrace or mezzanine over
+    /// nothing, a hole in a mesh).
     ///
-    /// Sound only for a camera that returns every surface within
-    /// `max_depth` (a simulator's; a stereo camera also misses textureless
-    /// or shiny floors), hence
+    /// In each image column sampled as by
+    /// [`occupancy_points`](Self::occupancy_points), a run of pixels without
+    /// a return (zero, NaN or infinite depth; a return nearer than
+    /// `min_depth` is a return) is a void when
+    /// * the pixel just below it (nearer along the floor) returns the
+    ///   floor (within [`FLOOR_EDGE_TOLERANCE_M`] of `floor_z`): the floor
+    ///   is seen to end there, where it would have gone on returning;
+    /// * every pixel of the run has its ray cross the floor height
+    ///   `floor_z` between `min_depth` and 90 % of `max_depth` (z-depth): a
+    ///   floor there would have returned;
+    /// * its crossings span at least [`MIN_VOID_RUN_M`] along the view: a
+    ///   narrower gap in the floor (under a door's threshold, between two
+    ///   rooms' floors of a modelled home, a seam of a scanned mesh) is no
+    ///   drop-off for a robot.
+    ///
+    /// The crossings of the run's pixels are the voids. A floor the camera
+    /// does not return at all (a missing model, a camera that does not
+    /// see it) shows no edge and gives no void. Point clouds and occupancy
+    /// returns have no voids (a cloud does not carry its misses). Sound
+    /// only for a camera that returns every surface within `max_depth` (a
+    /// simulator's; a stereo camera also misses textureless or shiny
+    /// floors), hence
     /// [`AgentConfig::voids_from_missing_depth`](crate::AgentConfig::voids_from_missing_depth).
     ///
     /// # Complexity
@@ -258,41 +271,73 @@ impl Observation {
         };
         let stride = occupancy_stride(options.stride, d.camera.width, max_columns);
         let (w, h) = (d.camera.width as usize, d.camera.height as usize);
-        let missing = |u: usize, v: usize| {
-            let z = d.depth[v * w + u];
-            !(z.is_finite() && z > 0.0)
-        };
         let origin = d.camera_pose.translation.vector;
         let far = 0.9 * options.max_depth;
         let mut out = Vec::new();
-        for v in (0..h).step_by(stride) {
-            for u in (0..w).step_by(stride) {
-                let neighbours = [
-                    u.checked_sub(stride).map(|u| (u, v)),
-                    (u + stride < w).then_some((u + stride, v)),
-                    v.checked_sub(stride).map(|v| (u, v)),
-                    (v + stride < h).then_some((u, v + stride)),
-                ];
-                if !missing(u, v) || neighbours.iter().flatten().any(|&(a, b)| !missing(a, b)) {
+        let mut run: Vec<Point2<f64>> = Vec::new();
+        for u in (0..w).step_by(stride) {
+            // From the bottom row up: nearer floor first.
+            let mut edge = false;
+            run.clear();
+            let mut rows: Vec<usize> = (0..h).step_by(stride).collect();
+            rows.reverse();
+            for v in rows {
+                let z = d.depth[v * w + u];
+                let (x, y) = (u as f64, v as f64);
+                if z.is_finite() && z > 0.0 {
+                    if edge && void_run_is_deep(&run) {
+                        out.append(&mut run);
+                    }
+                    run.clear();
+                    let p = d.camera_pose * d.camera.back_project(x, y, f64::from(z));
+                    edge = (p.z - floor_z).abs() <= FLOOR_EDGE_TOLERANCE_M;
+                    continue;
+                }
+                if !edge {
                     continue;
                 }
                 // The ray at z-depth 1: the crossing's parameter is its
                 // z-depth.
-                let ray =
-                    d.camera_pose.rotation * d.camera.back_project(u as f64, v as f64, 1.0).coords;
-                if ray.z >= 0.0 {
-                    continue;
-                }
+                let ray = d.camera_pose.rotation * d.camera.back_project(x, y, 1.0).coords;
                 let t = (floor_z - origin.z) / ray.z;
-                if t >= options.min_depth && t <= far {
+                if ray.z < 0.0 && t >= options.min_depth && t <= far {
                     let p = origin + t * ray;
-                    out.push(Point2::new(p.x, p.y));
+                    run.push(Point2::new(p.x, p.y));
+                } else {
+                    // Out of the window: the run cannot be told from a gap.
+                    if void_run_is_deep(&run) {
+                        out.append(&mut run);
+                    }
+                    run.clear();
+                    edge = false;
                 }
+            }
+            if edge && void_run_is_deep(&run) {
+                out.append(&mut run);
             }
         }
         out
     }
 }
+
+/// A return within this height (m) of the floor is the floor, for
+/// [`Observation::void_points`].
+pub const FLOOR_EDGE_TOLERANCE_M: f64 = 0.1;
+
+/// Whether the floor crossings of one run of missing pixels span at least
+/// [`MIN_VOID_RUN_M`].
+fn void_run_is_deep(run: &[Point2<f64>]) -> bool {
+    match (run.first(), run.last()) {
+        (Some(a), Some(b)) => (b - a).norm() >= MIN_VOID_RUN_M,
+        _ => false,
+    }
+}
+
+/// The smallest depth (m, along the view) of a hole in the floor that
+/// [`Observation::void_points`] reports: wider than a robot's body, wider
+/// than the floor gaps of modelled homes and scanned meshes (wall
+/// thresholds are 0.1-0.3 m).
+pub const MIN_VOID_RUN_M: f64 = 0.4;
 
 /// The pixel stride of a depth frame for the occupancy grid: the depth
 /// window's `stride`, raised so that at most `max_columns` of the `width`
@@ -337,27 +382,27 @@ mod tests {
         };
         let eye = Point3::new(0.0, 0.0, 0.88);
         let pose = sornav_semantic_map::optical_pose(&eye, 0.0, 0.3);
-        let mut depth = vec![0.0f32; 64 * 48];
-        for v in 0..48 {
-            for u in 0..64 {
-                let ray =
-                    pose.rotation * camera.back_project(f64::from(u), f64::from(v), 1.0).coords;
-                if ray.z < 0.0 {
-                    let t = -0.88 / ray.z;
-                    if ray.x * t < 2.0 {
-                        #[allow(clippy::cast_possible_truncation)]
-                        {
-                            depth[v as usize * 64 + u as usize] = t as f32;
+        // A depth frame of a floor present where `floor(x)` says.
+        let frame = |floor: &dyn Fn(f64) -> bool| {
+            let mut depth = vec![0.0f32; 64 * 48];
+            for v in 0..48 {
+                for u in 0..64 {
+                    let ray =
+                        pose.rotation * camera.back_project(f64::from(u), f64::from(v), 1.0).coords;
+                    if ray.z < 0.0 {
+                        let t = -0.88 / ray.z;
+                        if t <= 5.0 && floor(ray.x * t) {
+                            #[allow(clippy::cast_possible_truncation)]
+                            {
+                                depth[v as usize * 64 + u as usize] = t as f32;
+                            }
                         }
                     }
                 }
             }
-        }
-        // a dropped return in the middle of the floor
-        let dropped = 44 * 64 + 32;
-        assert!(depth[dropped] > 0.0);
-        depth[dropped] = 0.0;
-        let obs = Observation {
+            depth
+        };
+        let observe = |depth: Vec<f32>| Observation {
             pose: RobotPose::new(Point3::new(0.0, 0.0, 0.0), 0.0),
             sensor: Sensor::Depth(DepthObservation {
                 camera,
@@ -367,7 +412,12 @@ mod tests {
             }),
         };
         let options = DepthOptions::default();
-        let voids = obs.void_points(&options, 0, 0.0);
+        // The floor ends 2 m ahead; one return dropped inside it.
+        let mut depth = frame(&|x| x < 2.0);
+        let dropped = 44 * 64 + 32;
+        assert!(depth[dropped] > 0.0);
+        depth[dropped] = 0.0;
+        let voids = observe(depth).void_points(&options, 0, 0.0);
         assert!(voids.len() > 20, "{}", voids.len());
         for v in &voids {
             let z_depth = (pose.inverse() * Point3::new(v.x, v.y, 0.0)).z;
@@ -376,9 +426,15 @@ mod tests {
                 "{v:?}"
             );
         }
-        // a cloud has no voids
+        // A 0.2 m gap in the floor (a threshold between two rooms' floors)
+        // is no void, nor is a floor the camera does not return at all.
+        let gap = observe(frame(&|x| !(2.0..2.2).contains(&x)));
+        assert!(gap.void_points(&options, 0, 0.0).is_empty());
+        let unseen = observe(frame(&|_| false));
+        assert!(unseen.void_points(&options, 0, 0.0).is_empty());
+        // A cloud has no voids.
         let cloud = Observation {
-            pose: obs.pose,
+            pose: RobotPose::new(Point3::new(0.0, 0.0, 0.0), 0.0),
             sensor: Sensor::Occupancy(OccupancyObservation {
                 origin: eye,
                 points: vec![Point3::new(1.0, 0.0, 0.0)],
