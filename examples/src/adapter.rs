@@ -263,6 +263,8 @@ pub struct EpisodeTrace {
     pub blocked_missions: usize,
     /// Missions dispatched.
     pub missions: usize,
+    /// The LLM policy's counters, when the agent asks a model.
+    pub llm: Option<sornav::supervisor::LlmStats>,
 }
 
 /// SOR-Nav on platform-sim: a [`Policy`] around the [`Agent`].
@@ -352,9 +354,12 @@ impl<F: AgentFactory> SornavPolicy<F> {
         self.agent.as_ref()
     }
 
-    /// Takes the trace of the last episode.
+    /// Takes the trace of the last episode (with the LLM policy's
+    /// counters, when it asks a model).
     pub fn take_trace(&mut self) -> EpisodeTrace {
-        std::mem::take(&mut self.trace)
+        let mut trace = std::mem::take(&mut self.trace);
+        trace.llm = self.agent.as_ref().and_then(Agent::llm_stats);
+        trace
     }
 
     fn error(&mut self, context: &str, e: &AgentError) {
@@ -635,6 +640,15 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         self.follower.record(&feet, obs.yaw, action);
         self.last_act_end = Some(Instant::now());
         action
+    }
+
+    /// The wall time the LLM policy spent waiting for answers due in
+    /// simulated time.
+    fn simulated_wait_s(&self) -> f64 {
+        self.agent
+            .as_ref()
+            .and_then(Agent::llm_stats)
+            .map_or(0.0, |s| s.waited_ms as f64 / 1e3)
     }
 }
 
