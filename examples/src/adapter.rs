@@ -236,7 +236,8 @@ impl AgentFactory for ConfigFactory {
 /// What the adapter measured and logged during one episode.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeTrace {
-    /// Decision latency (observe + step) of every action, ms.
+    /// Decision latency (observe + step) of every action, ms, less the
+    /// time spent waiting for LLM answers due in simulated time.
     pub decision_ms: Histogram,
     /// Time between consecutive decisions spent outside the agent (render
     /// + simulator bookkeeping), ms.
@@ -676,11 +677,17 @@ impl<F: AgentFactory> SornavPolicy<F> {
             return Action::TurnLeft;
         }
         let now = self.now(step);
+        let waited_before_s = self.simulated_wait_s();
         let command = self.agent.as_mut().map(|a| a.step(now));
         if let Some(agent) = self.agent.as_mut() {
             self.trace.decisions.extend(agent.take_decisions());
         }
-        self.trace.decision_ms.add(t0.elapsed().as_secs_f64() * 1e3);
+        // Waiting for an LLM answer due in simulated time is not decision
+        // time (it is accounted in simulated time).
+        let waited_ms = (self.simulated_wait_s() - waited_before_s) * 1e3;
+        self.trace
+            .decision_ms
+            .add((t0.elapsed().as_secs_f64() * 1e3 - waited_ms).max(0.0));
         let command = match command {
             Some(Ok(c)) => c,
             Some(Err(e)) => {

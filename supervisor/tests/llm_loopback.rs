@@ -636,6 +636,50 @@ mod properties {
             }
             prop_assert!(!d.reason.is_empty());
         }
+
+        /// An asynchronous answer is applied to the state when it is due,
+        /// which may differ from the state asked about: it never names a
+        /// cluster outside the current candidates, and it is applied only
+        /// to the candidate chosen (same cluster id, same floor).
+        #[test]
+        fn asynchronous_answers_only_name_current_candidates(
+            id in 0u64..8,
+            asked in prop::collection::btree_set(0u64..8, 0..5),
+            current in prop::collection::btree_set(0u64..8, 0..5),
+            floors in prop::collection::vec(-1i32..2, 8),
+            labels in prop::collection::vec(prop_oneof![Just("sink"), Just("bed"), Just("sofa")], 8),
+        ) {
+            let content = format!(r#"{{"action":"relocate_cluster","cluster_id":{id},"reason":"r"}}"#);
+            let mut policy = LlmPolicy::with_transport(
+                LlmConfig {
+                    min_interval_s: 0.0,
+                    asynchronous: true,
+                    latency: LlmLatency::Fixed { seconds: 1.0 },
+                    ..LlmConfig::default()
+                },
+                Arc::new(Canned(content)),
+            ).unwrap();
+            let make = |ids: &std::collections::BTreeSet<u64>, shift: usize| {
+                let mut s = snapshot();
+                s.candidates = ids.iter().map(|&k| Candidate {
+                    floor: floors[k as usize],
+                    cluster_id: k,
+                    distance_m: 1.0,
+                    context: vec![CandidateObject::new(labels[(k as usize + shift) % 8], 10.0, 1.0)],
+                }).collect();
+                s
+            };
+            let (before, after) = (make(&asked, 0), make(&current, 1));
+            let first = policy.decide(&before, &at(1, 0.0));
+            prop_assert_eq!(first.action, PolicyAction::ContinueExplore);
+            let d = policy.decide(&after, &at(1, 1.0));
+            if let Some(k) = d.relocation() {
+                let now = after.candidate(k);
+                prop_assert!(now.is_some());
+                let then = usize::try_from(id).ok().and_then(|i| i.checked_sub(1)).and_then(|i| before.candidates.get(i));
+                prop_assert_eq!(then.map(|c| (c.cluster_id, c.floor)), now.map(|c| (c.cluster_id, c.floor)));
+            }
+        }
     }
 }
 

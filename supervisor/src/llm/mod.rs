@@ -448,7 +448,8 @@ impl LlmPolicy {
         let since_asked_s = now_s - pending.asked_s;
         // The worker always delivers within the request timeout; the cap
         // only guards against a transport that ignores it.
-        let cap = Duration::from_secs_f64(self.client.config.timeout_s * 2.0 + 5.0);
+        let secs = |s: f64| Duration::try_from_secs_f64(s.max(0.0)).unwrap_or(Duration::MAX);
+        let cap = secs(self.client.config.timeout_s * 2.0 + 5.0);
         let due = match self.client.config.latency {
             LlmLatency::Arrival => slot.is_some(),
             LlmLatency::Fixed { seconds } => {
@@ -466,8 +467,7 @@ impl LlmPolicy {
                 // Wait while it could still turn out due: until it arrives or
                 // the wall time since sending passes the simulated time
                 // since asking.
-                let limit =
-                    Duration::from_secs_f64((since_asked_s + DUE_MARGIN_S).max(0.0)).min(cap);
+                let limit = secs(since_asked_s + DUE_MARGIN_S).min(cap);
                 let left = limit.saturating_sub(pending.sent.elapsed());
                 if slot.is_none() && !left.is_zero() {
                     let (guard, _) = ready
