@@ -314,7 +314,11 @@ fn cli_flags_keep_the_config_policy_and_replay_needs_no_url() {
     // the recording (the requests must match it byte for byte).
     let bare = work.join("bare");
     common::sornav_sim_ok(
-        &with(&["--llm-replay".as_ref(), recording.as_os_str()]),
+        &with(&[
+            "--llm-replay".as_ref(),
+            recording.as_os_str(),
+            "--llm-async=false".as_ref(),
+        ]),
         &bare,
     );
     let settings = run_json(&bare)["llm"]["config"].clone();
@@ -322,5 +326,8 @@ fn cli_flags_keep_the_config_policy_and_replay_needs_no_url() {
         (settings["model"].clone(), settings["max_tokens"].clone()),
         (json!("fake"), json!(99))
     );
+    assert_eq!(settings["asynchronous"], false, "{settings}");
+    // What the recording does not carry keeps its default.
+    assert_eq!(settings["timeout_s"], 60.0, "{settings}");
     let _ = std::fs::remove_dir_all(&work);
 }
