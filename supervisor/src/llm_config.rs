@@ -196,7 +196,7 @@ pub struct LlmStats {
     pub rate_limited: u64,
     /// Asynchronous answers dropped because they no longer fit the state.
     pub dropped_late_answers: u64,
-    /// Whether the server rejected json_schema (json_object in use).
+    /// Whether json_object is in use (the endpoint rejected json_schema).
     pub json_object_fallback: bool,
     /// Latency of every exchange that reached the model (ms, in order).
     pub latency_ms: Vec<u64>,

@@ -25,9 +25,10 @@
 //!   thread and the policy keeps answering *continue exploring* meanwhile;
 //!   the answer takes effect when it is due ([`LlmLatency`]: on arrival, or
 //!   after the measured or a fixed latency in simulated time) and only if it
-//!   still fits the state: a relocation whose candidate is no longer
-//!   offered, or is offered with other surroundings or on another floor, is
-//!   dropped.
+//!   still fits the state: unless the question, as the model sees it, is
+//!   unchanged (then the answer stands, as a cached one would), a relocation
+//!   whose candidate is no longer offered under its cluster id, or is
+//!   offered with other surroundings or on another floor, is dropped.
 //! * [`transport::RecordingTransport`] writes every exchange (with its
 //!   latency) to JSONL and [`transport::ReplayTransport`] serves them back,
 //!   so an evaluation with a model re-runs offline bit-for-bit (with
@@ -362,7 +363,7 @@ impl LlmPolicy {
     /// request still in flight is not counted yet).
     pub fn stats(&self) -> LlmStats {
         LlmStats {
-            json_object_fallback: self.client.json_object.load(Ordering::Relaxed),
+            json_object_fallback: self.client.uses_json_object(),
             ..self.stats.clone()
         }
     }
