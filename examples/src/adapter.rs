@@ -240,7 +240,8 @@ impl AgentFactory for ConfigFactory {
 /// What the adapter measured and logged during one episode.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct EpisodeTrace {
-    /// Decision latency (observe + step) of every action, ms.
+    /// Decision latency (observe + step) of every action, ms, less the
+    /// time spent waiting for LLM answers due in simulated time.
     pub decision_ms: Histogram,
     /// Time between consecutive decisions spent outside the agent (render
     /// + simulator bookkeeping), ms.
@@ -267,6 +268,8 @@ pub struct EpisodeTrace {
     pub blocked_missions: usize,
     /// Missions dispatched.
     pub missions: usize,
+    /// The LLM policy's counters, when the agent asks a model.
+    pub llm: Option<sornav::supervisor::LlmStats>,
 }
 
 /// SOR-Nav on platform-sim: a [`Policy`] around the [`Agent`].
@@ -356,9 +359,12 @@ impl<F: AgentFactory> SornavPolicy<F> {
         self.agent.as_ref()
     }
 
-    /// Takes the trace of the last episode.
+    /// Takes the trace of the last episode (with the LLM policy's
+    /// counters, when it asks a model).
     pub fn take_trace(&mut self) -> EpisodeTrace {
-        std::mem::take(&mut self.trace)
+        let mut trace = std::mem::take(&mut self.trace);
+        trace.llm = self.agent.as_ref().and_then(Agent::llm_stats);
+        trace
     }
 
     fn error(&mut self, context: &str, e: &AgentError) {
@@ -640,6 +646,15 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         self.last_act_end = Some(Instant::now());
         action
     }
+
+    /// The wall time the LLM policy spent waiting for answers due in
+    /// simulated time.
+    fn simulated_wait_s(&self) -> f64 {
+        self.agent
+            .as_ref()
+            .and_then(Agent::llm_stats)
+            .map_or(0.0, |s| s.waited_ms as f64 / 1e3)
+    }
 }
 
 impl<F: AgentFactory> SornavPolicy<F> {
@@ -666,11 +681,17 @@ impl<F: AgentFactory> SornavPolicy<F> {
             return Action::TurnLeft;
         }
         let now = self.now(step);
+        let waited_before_s = self.simulated_wait_s();
         let command = self.agent.as_mut().map(|a| a.step(now));
         if let Some(agent) = self.agent.as_mut() {
             self.trace.decisions.extend(agent.take_decisions());
         }
-        self.trace.decision_ms.add(t0.elapsed().as_secs_f64() * 1e3);
+        // Waiting for an LLM answer due in simulated time is not decision
+        // time (it is accounted in simulated time).
+        let waited_ms = (self.simulated_wait_s() - waited_before_s) * 1e3;
+        self.trace
+            .decision_ms
+            .add((t0.elapsed().as_secs_f64() * 1e3 - waited_ms).max(0.0));
         let command = match command {
             Some(Ok(c)) => c,
             Some(Err(e)) => {

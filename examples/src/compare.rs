@@ -434,39 +434,15 @@ impl Comparison {
 mod tests {
     use super::*;
     use proptest::prelude::*;
-    use sornav_platform_sim::{EpisodeResult, Outcome};
+    use sornav_platform_sim::Outcome;
 
     fn record(id: usize, success: bool, spl: f64, floors: usize) -> EpisodeRecord {
-        EpisodeRecord::new(
-            "v",
-            EpisodeResult {
-                episode_id: id.to_string(),
-                scene_id: "s".into(),
-                object_category: "bed".into(),
-                success,
-                success_1m: success,
-                spl: if success { spl } else { 0.0 },
-                soft_spl: 0.0,
-                start_geodesic_m: 3.0,
-                dtg_m: Some(1.0),
-                path_length_m: 3.0,
-                actions: 10,
-                collisions: 0,
-                start_level: 0,
-                goal_level: floors,
-                floors_between: floors,
-                cross_floor: floors > 0,
-                outcome: if success {
-                    Outcome::Success
-                } else {
-                    Outcome::StepLimit
-                },
-                wall_s: 0.0,
-                timed_s: 0.0,
-                step_ms_p50: 0.0,
-            },
-            None,
-        )
+        let outcome = if success {
+            Outcome::Success
+        } else {
+            Outcome::StepLimit
+        };
+        crate::record::test_record(&id.to_string(), outcome, spl, floors)
     }
 
     fn runs() -> impl Strategy<Value = Vec<(bool, f64, bool, f64, usize)>> {

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use sornav::supervisor::LlmConfig;
 use sornav::supervisor::llm::transport::{
-    HttpTransport, RecordingTransport, ReplayTransport, Transport,
+    EndpointError, HttpTransport, RecordingTransport, ReplayTransport, Transport, check_endpoint,
 };
 use sornav::{AgentConfig, AgentError, BoxedPolicy, PolicyConfig, Variant};
 use sornav_platform_sim::episodes::{GeneratorConfig, HabitatDataset, generate_episodes};
@@ -78,6 +78,9 @@ pub enum HarnessError {
     /// Invalid settings.
     #[error("invalid settings: {0}")]
     Config(String),
+    /// The LLM endpoint failed the startup check.
+    #[error(transparent)]
+    LlmEndpoint(#[from] EndpointError),
     /// Episode generation or reading failed.
     #[error("episodes of {scene}: {message}")]
     Episodes {
@@ -556,6 +559,31 @@ fn check_run_file(dir: &Path, config: &EvalConfig, fresh: bool) -> Result<(), Ha
     }
     let text = serde_json::to_string_pretty(config).map_err(|e| io_err(&path, e))?;
     Ok(output::write_file(&path, text.as_bytes())?)
+}
+
+/// Checks the LLM endpoint of `config` before a run
+/// ([`check_endpoint`]): reachable, serving the model. Nothing to check
+/// without an LLM policy or when replaying a recording.
+///
+/// # Errors
+/// [`HarnessError::LlmEndpoint`] saying what is wrong.
+pub fn check_llm(config: &EvalConfig) -> Result<(), HarnessError> {
+    match &config.llm {
+        Some(settings) if settings.replay.is_none() => {
+            let models = check_endpoint(&settings.config)?;
+            tracing::info!(
+                "LLM endpoint {} answers (models: {})",
+                settings.config.base_url,
+                if models.is_empty() {
+                    "not listed".to_owned()
+                } else {
+                    models.join(", ")
+                }
+            );
+            Ok(())
+        }
+        _ => Ok(()),
+    }
 }
 
 /// The transport of the LLM policy (HTTP, recording or replay).

@@ -1,6 +1,7 @@
 //! One line of `episodes.jsonl`: the result of one (variant, episode) run.
 
 use serde::{Deserialize, Serialize};
+use sornav::supervisor::LlmStats;
 use sornav_platform_sim::EpisodeResult;
 
 use crate::adapter::EpisodeTrace;
@@ -47,6 +48,10 @@ pub struct EpisodeRecord {
     pub errors: Vec<String>,
     /// The decision log (runs of identical decisions merged).
     pub decisions: DecisionLog,
+    /// The LLM policy's counters (requests, valid answers, fallbacks by
+    /// cause, latencies, tokens), when the agent asked a model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub llm: Option<LlmStats>,
 }
 
 impl EpisodeRecord {
@@ -79,6 +84,46 @@ impl EpisodeRecord {
             blocked_missions: trace.blocked_missions,
             errors: trace.errors,
             decisions: trace.decisions,
+            llm: trace.llm,
         }
     }
+}
+
+/// A record of one finished episode for unit tests: scene `s`, target
+/// `bed`, 10 actions over 3 m, start 3 m from the goal, `floors` floors
+/// between start and goal.
+#[cfg(test)]
+pub(crate) fn test_record(
+    episode_id: &str,
+    outcome: sornav_platform_sim::Outcome,
+    spl: f64,
+    floors: usize,
+) -> EpisodeRecord {
+    let success = outcome == sornav_platform_sim::Outcome::Success;
+    EpisodeRecord::new(
+        "v",
+        EpisodeResult {
+            episode_id: episode_id.to_owned(),
+            scene_id: "s".into(),
+            object_category: "bed".into(),
+            success,
+            success_1m: success,
+            spl: if success { spl } else { 0.0 },
+            soft_spl: 0.0,
+            start_geodesic_m: 3.0,
+            dtg_m: Some(1.0),
+            path_length_m: 3.0,
+            actions: 10,
+            collisions: 0,
+            start_level: 0,
+            goal_level: floors,
+            floors_between: floors,
+            cross_floor: floors > 0,
+            outcome,
+            wall_s: 0.0,
+            timed_s: 0.0,
+            step_ms_p50: 0.0,
+        },
+        None,
+    )
 }

@@ -156,6 +156,44 @@ pub fn table(summaries: &[VariantSummary]) -> String {
             v.episode_wall_s_mean,
         );
     }
+    if summaries.iter().any(|v| v.llm.is_some()) {
+        let _ = writeln!(
+            s,
+            "\n| variant | LLM requests | valid answers (%) | fallbacks by cause | dropped late | latency ms p50 / p99 | prompt tokens / request | completion tokens |"
+        );
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|");
+        for v in summaries {
+            let Some(l) = &v.llm else { continue };
+            let causes: Vec<String> = l
+                .fallbacks_by_cause
+                .iter()
+                .map(|(c, n)| format!("{c} {n}"))
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {}{} | {} ({}) | {} | {} | {:.0} / {:.0} | {:.0} | {} |",
+                v.variant,
+                l.requests,
+                if l.json_object_fallback {
+                    " (json_object)"
+                } else {
+                    ""
+                },
+                l.valid,
+                pct(l.valid_rate),
+                if causes.is_empty() {
+                    "none".to_owned()
+                } else {
+                    causes.join(", ")
+                },
+                l.dropped_late_answers,
+                l.latency_ms_p50,
+                l.latency_ms_p99,
+                l.prompt_tokens_per_request,
+                l.completion_tokens,
+            );
+        }
+    }
     s
 }
 

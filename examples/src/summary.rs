@@ -13,6 +13,7 @@
 use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
+use sornav::supervisor::LlmStats;
 use sornav_platform_sim::{EpisodeResult, Summary};
 
 use crate::histogram::Histogram;
@@ -173,6 +174,91 @@ pub struct VariantSummary {
     pub by_floors: Vec<FloorBin>,
     /// Episodes per outcome class.
     pub outcomes: BTreeMap<String, u64>,
+    /// The LLM policy's figures, when the variant asked a model.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub llm: Option<LlmSummary>,
+}
+
+/// What the LLM policy did over a variant's episodes: are its decisions
+/// usable, how fast and how costly.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct LlmSummary {
+    /// Episodes whose agent asked a model.
+    pub episodes: u64,
+    /// Policy evaluations (`decide` calls: rate-limited, cached and pending
+    /// ones included).
+    pub calls: u64,
+    /// HTTP requests sent (a json_object retry counts).
+    pub requests: u64,
+    /// Valid answers used.
+    pub valid: u64,
+    /// Valid answers over valid answers plus fallbacks (0 without any).
+    pub valid_rate: f64,
+    /// Answers that fell back to exploring.
+    pub fallbacks: u64,
+    /// Fallbacks by cause (`timeout`, `transport`, `http_status`,
+    /// `invalid_answer`, ...).
+    pub fallbacks_by_cause: BTreeMap<String, u64>,
+    /// Asynchronous answers dropped because they no longer fitted.
+    pub dropped_late_answers: u64,
+    /// Answers served from the cache.
+    pub cache_hits: u64,
+    /// Exchange latency, median (ms; 0 without any).
+    pub latency_ms_p50: f64,
+    /// Exchange latency, 99th percentile (ms).
+    pub latency_ms_p99: f64,
+    /// Prompt tokens reported by the server, summed.
+    pub prompt_tokens: u64,
+    /// Completion tokens reported by the server, summed.
+    pub completion_tokens: u64,
+    /// Mean prompt tokens per request (0 without any).
+    pub prompt_tokens_per_request: f64,
+    /// Whether the server needed the json_object fallback.
+    pub json_object_fallback: bool,
+    /// Wall time spent waiting for answers due in simulated time (s).
+    pub waited_s: f64,
+}
+
+impl LlmSummary {
+    /// The figures of `records` that carry LLM counters (`None` when none
+    /// does).
+    ///
+    /// # Complexity
+    /// O(total requests · log) for the latency quantiles.
+    pub fn of(records: &[&EpisodeRecord]) -> Option<Self> {
+        let mut total = LlmStats::default();
+        let mut episodes = 0;
+        for stats in records.iter().filter_map(|r| r.llm.as_ref()) {
+            total.merge(stats);
+            episodes += 1;
+        }
+        if episodes == 0 {
+            return None;
+        }
+        let quantile = |q| total.latency_quantile_ms(q).map_or(0.0, |ms| ms as f64);
+        Some(Self {
+            episodes,
+            calls: total.calls,
+            requests: total.requests,
+            valid: total.answers,
+            valid_rate: total.valid_rate().unwrap_or(0.0),
+            fallbacks: total.failures,
+            fallbacks_by_cause: total.failures_by_cause.clone(),
+            dropped_late_answers: total.dropped_late_answers,
+            cache_hits: total.cache_hits,
+            latency_ms_p50: quantile(0.5),
+            latency_ms_p99: quantile(0.99),
+            prompt_tokens: total.prompt_tokens,
+            completion_tokens: total.completion_tokens,
+            prompt_tokens_per_request: if total.requests == 0 {
+                0.0
+            } else {
+                total.prompt_tokens as f64 / total.requests as f64
+            },
+            json_object_fallback: total.json_object_fallback,
+            waited_s: total.waited_ms as f64 / 1e3,
+        })
+    }
 }
 
 fn mean(values: impl Iterator<Item = f64>) -> f64 {
@@ -304,6 +390,7 @@ impl VariantSummary {
             distance_bins,
             by_floors,
             outcomes,
+            llm: LlmSummary::of(records),
         }
     }
 }
@@ -324,6 +411,78 @@ pub fn summarize(records: &[EpisodeRecord], variants: &[String]) -> Vec<VariantS
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    /// A record of one episode with `outcome`, on `floors` floors between
+    /// start and goal, and LLM counters when given.
+    fn record(
+        outcome: sornav_platform_sim::Outcome,
+        floors: usize,
+        llm: Option<LlmStats>,
+    ) -> EpisodeRecord {
+        let mut r = crate::record::test_record("e", outcome, 0.0, floors);
+        r.llm = llm;
+        r
+    }
+
+    /// Issue 22: a wall-clock cut is a timeout whatever the floors.
+    #[test]
+    fn wall_clock_cut_is_a_timeout_on_any_floor() {
+        use sornav_platform_sim::Outcome;
+        let records = [
+            record(Outcome::Timeout, 1, None),
+            record(Outcome::Timeout, 0, None),
+        ];
+        let refs: Vec<&EpisodeRecord> = records.iter().collect();
+        let s = VariantSummary::of("sornav", &refs);
+        assert_eq!(s.timeout_rate, 1.0);
+        assert_eq!(s.outcomes.get("timeout"), Some(&2));
+        assert_eq!(s.cross_floor_episodes, 1);
+        assert!(s.llm.is_none(), "no LLM figures without an LLM");
+    }
+
+    #[test]
+    fn llm_figures_add_up_over_episodes() {
+        use sornav_platform_sim::Outcome;
+        let stats = |answers, failures: &[(&str, u64)], latency: Vec<u64>| LlmStats {
+            requests: latency.len() as u64,
+            answers,
+            failures: failures.iter().map(|f| f.1).sum(),
+            failures_by_cause: failures.iter().map(|&(c, n)| (c.to_owned(), n)).collect(),
+            prompt_tokens: 300 * latency.len() as u64,
+            completion_tokens: 20 * answers,
+            latency_ms: latency,
+            ..LlmStats::default()
+        };
+        let records = [
+            record(
+                Outcome::Success,
+                0,
+                Some(stats(3, &[("timeout", 1)], vec![100, 200, 300, 60_000])),
+            ),
+            record(
+                Outcome::StepLimit,
+                0,
+                Some(stats(
+                    6,
+                    &[("invalid_answer", 1), ("timeout", 1)],
+                    vec![100; 8],
+                )),
+            ),
+            record(Outcome::StepLimit, 0, None),
+        ];
+        let refs: Vec<&EpisodeRecord> = records.iter().collect();
+        let l = VariantSummary::of("sornav", &refs).llm.unwrap();
+        assert_eq!(l.episodes, 2);
+        assert_eq!((l.requests, l.valid, l.fallbacks), (12, 9, 3));
+        assert!((l.valid_rate - 0.75).abs() < 1e-12);
+        assert_eq!(l.fallbacks_by_cause.get("timeout"), Some(&2));
+        assert_eq!(l.fallbacks_by_cause.get("invalid_answer"), Some(&1));
+        assert_eq!((l.latency_ms_p50, l.latency_ms_p99), (100.0, 60_000.0));
+        assert_eq!(l.prompt_tokens_per_request, 300.0);
+        assert_eq!(l.completion_tokens, 180);
+        let table = crate::report::table(&[VariantSummary::of("sornav", &refs)]);
+        assert!(table.contains("| sornav | 12 | 9 (75.0) | invalid_answer 1, timeout 2 | 0 | 100 / 60000 | 300 | 180 |"), "{table}");
+    }
 
     #[test]
     fn wilson_matches_published_values() {

@@ -28,6 +28,14 @@ pub trait Policy {
     }
     /// The next action.
     fn act(&mut self, obs: &Observation<'_>) -> Action;
+    /// Wall time (s) this episode's [`act`](Self::act) calls spent waiting
+    /// for a service whose latency the policy accounts in simulated time
+    /// instead (an LLM answer due at a simulated time): left out of the
+    /// wall-clock budget, so that a slow machine or server does not cut
+    /// the episode. Default 0.
+    fn simulated_wait_s(&self) -> f64 {
+        0.0
+    }
 }
 
 /// Calls STOP at once (every episode must then fail: none starts at a view point).

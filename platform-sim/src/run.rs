@@ -295,7 +295,9 @@ impl Observation<'_> {
 /// first and right after every `act`; an action returned after the budget ran out is
 /// discarded (neither executed nor counted, so a late STOP is no success)
 /// and the episode ends as a timeout. A policy blocked inside `act` is not
-/// interrupted: it times out when `act` returns.
+/// interrupted: it times out when `act` returns. Time the policy reports as
+/// accounted in simulated time ([`Policy::simulated_wait_s`]) is not
+/// counted.
 /// [`EpisodeResult::timed_s`] reports the counted time,
 /// [`EpisodeResult::wall_s`] the whole call.
 ///
@@ -337,11 +339,14 @@ pub fn run_episode(
     let seed_base = config.noise_seed ^ hash_str(&episode.episode_id);
     // the budget counts from the first observation on (setup excluded)
     let clock = Instant::now();
-    let spent = |clock: &Instant| clock.elapsed().as_secs_f64() > config.wall_clock_s;
+    let counted = |clock: &Instant, policy: &dyn Policy| {
+        clock.elapsed().as_secs_f64() - policy.simulated_wait_s().max(0.0)
+    };
+    let spent = |clock: &Instant, policy: &dyn Policy| counted(clock, policy) > config.wall_clock_s;
     // How the loop ended: STOP, step limit or timeout.
     let loop_end = loop {
         // (before the first observation nothing has been counted yet)
-        if actions > 0 && spent(&clock) {
+        if actions > 0 && spent(&clock, policy) {
             break LoopEnd::Timeout;
         }
         let ts = Instant::now();
@@ -360,7 +365,7 @@ pub fn run_episode(
             scene: sim.scene(),
         };
         let action = policy.act(&obs);
-        if spent(&clock) {
+        if spent(&clock, policy) {
             // the action came after the budget ran out: discarded
             step_ms.push(ts.elapsed().as_secs_f64() * 1e3);
             break LoopEnd::Timeout;
@@ -381,7 +386,7 @@ pub fn run_episode(
         }
     };
     let stopped = loop_end == LoopEnd::Stopped;
-    let timed_s = clock.elapsed().as_secs_f64();
+    let timed_s = counted(&clock, policy);
     let end = agent.position();
     let dtg = field.distance(nav, &end).ok().filter(|d| d.is_finite());
     let success = stopped && dtg.is_some_and(|d| d <= config.success_distance);

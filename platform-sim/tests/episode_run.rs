@@ -315,6 +315,59 @@ fn random_walk_hits_the_step_limit_and_taxonomy_holds() {
     assert_eq!(r.outcome, Outcome::Timeout);
 }
 
+/// A random walk that sleeps in every `act` and reports the sleep as
+/// accounted in simulated time (an LLM answer the policy waited for).
+struct WaitingWalk {
+    walk: RandomWalk,
+    sleep: std::time::Duration,
+    waited_s: f64,
+    reported: bool,
+}
+
+impl Policy for WaitingWalk {
+    fn needs_frames(&self) -> bool {
+        false
+    }
+    fn act(&mut self, obs: &sornav_platform_sim::Observation<'_>) -> sornav_platform_sim::Action {
+        std::thread::sleep(self.sleep);
+        self.waited_s += self.sleep.as_secs_f64();
+        self.walk.act(obs)
+    }
+    fn simulated_wait_s(&self) -> f64 {
+        if self.reported { self.waited_s } else { 0.0 }
+    }
+}
+
+/// Issue 22: wall time a policy accounts in simulated time does not count
+/// toward the wall-clock budget; the same waits unreported time out.
+#[test]
+fn simulated_waits_are_left_out_of_the_wall_clock_budget() {
+    let sim = simulator(common::house(4, 1));
+    let episodes = common::one_episode_per_category(&sim);
+    let config = RunConfig {
+        max_actions: 8,
+        wall_clock_s: 0.2,
+        ..RunConfig::default()
+    };
+    let walk = |reported| WaitingWalk {
+        walk: RandomWalk::new(3),
+        sleep: std::time::Duration::from_millis(50),
+        waited_s: 0.0,
+        reported,
+    };
+    let r = run_episode(&sim, &episodes[0], &mut walk(true), &config).unwrap();
+    assert_eq!(r.outcome, Outcome::StepLimit, "{r:?}");
+    assert_eq!(r.actions, 8);
+    assert!(
+        r.timed_s < 0.2 && r.wall_s >= 0.4,
+        "{} {}",
+        r.timed_s,
+        r.wall_s
+    );
+    let r = run_episode(&sim, &episodes[0], &mut walk(false), &config).unwrap();
+    assert_eq!(r.outcome, Outcome::Timeout, "{r:?}");
+}
+
 /// A random walk that asks for frames (exercises the render path of the loop).
 struct RenderingWalk(RandomWalk);
 

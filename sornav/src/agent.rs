@@ -593,6 +593,13 @@ impl Agent {
         self.stats
     }
 
+    /// The counters of the context policy when it asks a language model
+    /// (calls, valid answers, fallbacks by cause, latencies, tokens); `None`
+    /// for the other policies.
+    pub fn llm_stats(&self) -> Option<sornav_supervisor::LlmStats> {
+        self.supervisor.policy().llm_stats()
+    }
+
     /// Sets the target from a category or a free-text request ("find the
     /// television"), see [`Vocabulary::resolve`]. The maps are kept (several
     /// targets in a row); the gate, the route and any active mission are

@@ -114,7 +114,7 @@ pub use label::{OBJECTNAV_CATEGORIES, STRUCTURAL_LABELS, normalize_label};
 #[cfg(feature = "llm")]
 #[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
 pub use llm::LlmPolicy;
-pub use llm_config::LlmConfig;
+pub use llm_config::{LlmConfig, LlmLatency, LlmStats};
 pub use policy::{ContextPolicy, NeverRelocate, PolicyAction, PolicyDecision, Situation};
 pub use prior::{
     ATTRIBUTION, CooccurrencePrior, MP3D_EXTRA_TARGETS, Posterior, PriorBuildConfig, TargetRow,

@@ -5,6 +5,7 @@
 use serde::{Deserialize, Serialize};
 
 use crate::context::RegionSnapshot;
+use crate::llm_config::LlmStats;
 
 /// The policy's action `a_t`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -78,6 +79,13 @@ pub trait ContextPolicy {
 
     /// Decides whether to keep exploring the current context or relocate.
     fn decide(&mut self, snapshot: &RegionSnapshot, situation: &Situation) -> PolicyDecision;
+
+    /// The counters of a policy that asks a language model (calls, valid
+    /// answers, fallbacks by cause, latencies, tokens), for reports; `None`
+    /// (the default) for every other policy.
+    fn llm_stats(&self) -> Option<LlmStats> {
+        None
+    }
 }
 
 impl<P: ContextPolicy + ?Sized> ContextPolicy for Box<P> {
@@ -86,6 +94,9 @@ impl<P: ContextPolicy + ?Sized> ContextPolicy for Box<P> {
     }
     fn decide(&mut self, snapshot: &RegionSnapshot, situation: &Situation) -> PolicyDecision {
         (**self).decide(snapshot, situation)
+    }
+    fn llm_stats(&self) -> Option<LlmStats> {
+        (**self).llm_stats()
     }
 }
 

@@ -1,6 +1,7 @@
 //! A loopback OpenAI-compatible chat-completions server for the tests of the
 //! LLM context policy: std `TcpListener` on `127.0.0.1:0` (never another
-//! address), one thread per connection, `POST /v1/chat/completions` only
+//! address), one thread per connection, `POST /v1/chat/completions` and,
+//! when given a model list ([`serve_with_models`]), `GET /v1/models`
 //! (anything else gets a 404).
 //!
 //! # Example
@@ -53,12 +54,23 @@ impl ChatServer {
     }
 }
 
-/// The JSON body of a `POST /v1/chat/completions` request; `None` for any
-/// other request or a malformed one.
-fn read_request(stream: &mut TcpStream) -> Option<Value> {
+/// A request the server understands.
+enum Request {
+    /// `POST /v1/chat/completions` with its JSON body.
+    Chat(Value),
+    /// `GET /v1/models`.
+    Models,
+}
+
+/// The request read from `stream`; `None` for any other request or a
+/// malformed one.
+fn read_request(stream: &mut TcpStream) -> Option<Request> {
     let mut reader = BufReader::new(stream.try_clone().ok()?);
     let mut line = String::new();
     reader.read_line(&mut line).ok()?;
+    if line.starts_with("GET /v1/models ") {
+        return Some(Request::Models);
+    }
     if !line.starts_with("POST /v1/chat/completions ") {
         return None;
     }
@@ -78,14 +90,32 @@ fn read_request(stream: &mut TcpStream) -> Option<Value> {
     }
     let mut body = vec![0; length];
     reader.read_exact(&mut body).ok()?;
-    serde_json::from_slice(&body).ok()
+    serde_json::from_slice(&body).ok().map(Request::Chat)
 }
 
-/// Starts a server on a free loopback port answering with `handler`.
+fn respond(stream: &mut TcpStream, status: u16, body: &str) -> bool {
+    let text = format!(
+        "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{body}",
+        body.len()
+    );
+    stream.write_all(text.as_bytes()).is_ok()
+}
+
+/// Starts a server on a free loopback port answering chat completions with
+/// `handler` (`GET /v1/models` gets a 404).
 ///
 /// # Panics
 /// When no loopback port can be bound (the test cannot run then).
 pub fn serve(handler: Arc<Handler>) -> ChatServer {
+    serve_with_models(handler, None)
+}
+
+/// [`serve`], and `GET /v1/models` lists `models` when given (an OpenAI
+/// model list: `{"object":"list","data":[{"id":...}]}`).
+///
+/// # Panics
+/// When no loopback port can be bound (the test cannot run then).
+pub fn serve_with_models(handler: Arc<Handler>, models: Option<Vec<String>>) -> ChatServer {
     let listener = TcpListener::bind("127.0.0.1:0").expect("bind loopback");
     let base_url = format!(
         "http://{}/v1",
@@ -99,21 +129,36 @@ pub fn serve(handler: Arc<Handler>) -> ChatServer {
         Arc::clone(&hits),
         Arc::clone(&answered),
     );
+    let models: Option<Arc<str>> = models.map(|m| {
+        let data: Vec<Value> = m
+            .iter()
+            .map(|id| json!({"id": id, "object": "model"}))
+            .collect();
+        json!({"object": "list", "data": data}).to_string().into()
+    });
     thread::spawn(move || {
         for stream in listener.incoming() {
             let Ok(mut stream) = stream else { continue };
             let handler = Arc::clone(&handler);
+            let models = models.clone();
             let (req3, hits3, answered3) = (
                 Arc::clone(&req2),
                 Arc::clone(&hits2),
                 Arc::clone(&answered2),
             );
             thread::spawn(move || {
-                let Some(body) = read_request(&mut stream) else {
-                    let _ = stream.write_all(
-                        b"HTTP/1.1 404 Not Found\r\ncontent-length: 0\r\nconnection: close\r\n\r\n",
-                    );
-                    return;
+                let body = match (read_request(&mut stream), models) {
+                    (Some(Request::Chat(body)), _) => body,
+                    (Some(Request::Models), Some(list)) => {
+                        respond(&mut stream, 200, &list);
+                        return;
+                    }
+                    _ => {
+                        let _ = stream.write_all(
+                            b"HTTP/1.1 404 Not Found\r\ncontent-length: 0\r\nconnection: close\r\n\r\n",
+                        );
+                        return;
+                    }
                 };
                 hits3.fetch_add(1, Ordering::SeqCst);
                 let (status, reply, delay) = handler(&body);
@@ -121,11 +166,7 @@ pub fn serve(handler: Arc<Handler>) -> ChatServer {
                     requests.push(body);
                 }
                 thread::sleep(delay);
-                let text = format!(
-                    "HTTP/1.1 {status} X\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{reply}",
-                    reply.len()
-                );
-                if stream.write_all(text.as_bytes()).is_ok() {
+                if respond(&mut stream, status, &reply) {
                     answered3.fetch_add(1, Ordering::SeqCst);
                 }
             });

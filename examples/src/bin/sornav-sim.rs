@@ -10,8 +10,9 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Args, Parser, Subcommand};
-use sornav::AgentConfig;
-use sornav::supervisor::LlmConfig;
+use sornav::supervisor::LlmLatency;
+use sornav::supervisor::llm::transport::ReplayTransport;
+use sornav::{AgentConfig, PolicyConfig};
 use sornav_examples::adapter::{AdapterConfig, sim_agent_config};
 use sornav_examples::harness::{
     self, EpisodeSource, EvalConfig, LlmSettings, RunOptions, VARIANTS,
@@ -114,18 +115,41 @@ struct RunArgs {
     height: u32,
     /// OpenAI-compatible endpoint (base URL up to `/v1`) for the `sornav`
     /// variant's LLM policy, instead of the embedded commonsense policy.
+    /// Checked before the run (reachable, serving `--llm-model`). The
+    /// `--llm-*` flags override only what they name: the other settings
+    /// come from `[policy]` of `--config` (when it is `kind = "llm"`) or
+    /// the defaults.
     #[arg(long, value_name = "URL")]
     llm: Option<String>,
-    /// Model name for `--llm`.
-    #[arg(long, value_name = "NAME", default_value = "gpt-4o-mini")]
-    llm_model: String,
-    /// Environment variable holding the API key for `--llm`.
-    #[arg(long, value_name = "VAR", default_value = "OPENAI_API_KEY")]
-    llm_key_env: String,
+    /// Model name (default `gpt-4o-mini`; with `--llm-replay`, the
+    /// recording's).
+    #[arg(long, value_name = "NAME")]
+    llm_model: Option<String>,
+    /// Environment variable holding the API key (default `OPENAI_API_KEY`;
+    /// unset sends no key).
+    #[arg(long, value_name = "VAR")]
+    llm_key_env: Option<String>,
+    /// Request timeout of the LLM policy, seconds (default 60).
+    #[arg(long, value_name = "S")]
+    llm_timeout: Option<f64>,
+    /// Token budget of an answer (default 128).
+    #[arg(long, value_name = "N")]
+    llm_max_tokens: Option<u32>,
+    /// Asynchronous decisions (`--llm-async`, `--llm-async=false`; default
+    /// true): the agent keeps exploring while the model thinks.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    llm_async: Option<bool>,
+    /// When an asynchronous answer takes effect, in simulated time:
+    /// `measured` (its measured latency, recorded; the default) or
+    /// `fixed:S` (S seconds whatever it took; results independent of the
+    /// machine and server speed).
+    #[arg(long, value_name = "measured|fixed:S", value_parser = parse_latency)]
+    llm_latency: Option<LlmLatency>,
     /// Record every LLM exchange to this JSONL file.
     #[arg(long, value_name = "FILE")]
     llm_record: Option<PathBuf>,
-    /// Replay LLM answers from a recording (offline, bit-for-bit).
+    /// Replay LLM answers from a recording (offline, bit-for-bit; no URL
+    /// needed, the model name and token budget are the recording's).
     #[arg(long, value_name = "FILE")]
     llm_replay: Option<PathBuf>,
     /// Run only shard `i` of `n` (`--shard 3/16`): work items k with
@@ -165,6 +189,88 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
         return Err(format!("need 0 <= i < n, got {i}/{n}"));
     }
     Ok((i, n))
+}
+
+fn parse_latency(s: &str) -> Result<LlmLatency, String> {
+    match LlmLatency::parse(s) {
+        Ok(LlmLatency::Arrival) => Err(
+            "arrival (wall-clock) latency would make results depend on the machine: use measured or fixed:S"
+                .into(),
+        ),
+        Ok(l) => Ok(l),
+        Err(e) => Err(e.to_string()),
+    }
+}
+
+/// The LLM settings of a run: `[policy]` of the agent configuration when
+/// it is an LLM policy (else the defaults), overridden by the `--llm-*`
+/// flags given; `None` without any LLM.
+fn llm_settings(a: &RunArgs, agent: &AgentConfig) -> Result<Option<LlmSettings>, String> {
+    let from_config = match &agent.policy {
+        PolicyConfig::Llm(c) => Some(c.clone()),
+        _ => None,
+    };
+    if a.llm.is_none() && a.llm_replay.is_none() && from_config.is_none() {
+        let named = a.llm_record.is_some()
+            || a.llm_model.is_some()
+            || a.llm_key_env.is_some()
+            || a.llm_timeout.is_some()
+            || a.llm_max_tokens.is_some()
+            || a.llm_async.is_some()
+            || a.llm_latency.is_some();
+        if named {
+            return Err("the --llm-* flags need --llm URL, --llm-replay FILE or [policy] kind = \"llm\" in --config".into());
+        }
+        return Ok(None);
+    }
+    if a.llm_record.is_some() && a.llm_replay.is_some() {
+        return Err("--llm-record and --llm-replay exclude each other".into());
+    }
+    let mut config = from_config.unwrap_or_default();
+    if let Some(url) = &a.llm {
+        config.base_url = url.clone();
+    }
+    if let Some(replay) = &a.llm_replay {
+        let recording = ReplayTransport::open(replay).map_err(|e| e.to_string())?;
+        let recorded = recording.recorded_settings().ok_or_else(|| {
+            format!(
+                "{}: not a recording of LLM exchanges (no request in it)",
+                replay.display()
+            )
+        })?;
+        config.model = recorded.model;
+        config.temperature = recorded.temperature;
+        config.max_tokens = recorded.max_tokens;
+    }
+    if let Some(m) = &a.llm_model {
+        config.model = m.clone();
+    }
+    if let Some(k) = &a.llm_key_env {
+        config.api_key_env = Some(k.clone());
+    }
+    if let Some(t) = a.llm_timeout {
+        config.timeout_s = t;
+    }
+    if let Some(n) = a.llm_max_tokens {
+        config.max_tokens = Some(n);
+    }
+    if let Some(b) = a.llm_async {
+        config.asynchronous = b;
+    }
+    match a.llm_latency {
+        Some(l) => config.latency = l,
+        // The simulator's clock is simulated: never wall-clock arrival.
+        None if config.latency == LlmLatency::Arrival => config.latency = LlmLatency::Measured,
+        None => {}
+    }
+    config
+        .validate()
+        .map_err(|e| format!("LLM settings: {e}"))?;
+    Ok(Some(LlmSettings {
+        config,
+        record: a.llm_record.clone(),
+        replay: a.llm_replay.clone(),
+    }))
 }
 
 fn default_models() -> Option<PathBuf> {
@@ -227,19 +333,7 @@ fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
         Some(path) => AgentConfig::from_toml_file(path).map_err(|e| e.to_string())?,
         None => sim_agent_config(),
     };
-    let llm = a.llm.as_ref().map(|url| LlmSettings {
-        config: LlmConfig {
-            base_url: url.clone(),
-            model: a.llm_model.clone(),
-            api_key_env: Some(a.llm_key_env.clone()),
-            ..LlmConfig::default()
-        },
-        record: a.llm_record.clone(),
-        replay: a.llm_replay.clone(),
-    });
-    if a.llm.is_none() && (a.llm_record.is_some() || a.llm_replay.is_some()) {
-        return Err("--llm-record / --llm-replay need --llm URL".into());
-    }
+    let llm = llm_settings(a, &agent)?;
     Ok(EvalConfig {
         scenes,
         models: a.models.clone().or_else(default_models),
@@ -352,7 +446,11 @@ fn main() -> ExitCode {
                 progress: !cli.run.quiet,
                 stop: Some(Arc::clone(&stop)),
             };
-            if let Err(e) = config.validate().and_then(|()| options.validate()) {
+            if let Err(e) = config
+                .validate()
+                .and_then(|()| options.validate())
+                .and_then(|()| harness::check_llm(&config))
+            {
                 eprintln!("sornav-sim: {e}");
                 return ExitCode::from(2);
             }

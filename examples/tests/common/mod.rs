@@ -71,3 +71,25 @@ pub fn options(out: &Path, jobs: usize, shard: Option<(usize, usize)>, fresh: bo
         stop: None,
     }
 }
+
+/// Runs the `sornav-sim` binary with `args`, `--out out` and `--quiet`;
+/// panics with its stderr unless it succeeds; returns its stdout.
+#[allow(dead_code)] // not every test binary runs the CLI
+pub fn sornav_sim_ok<S: AsRef<std::ffi::OsStr>>(args: &[S], out: &Path) -> String {
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_sornav-sim"))
+        .args(args)
+        .arg("--out")
+        .arg(out)
+        .arg("--quiet")
+        .output()
+        .expect("sornav-sim runs");
+    assert!(
+        run.status.success(),
+        "sornav-sim {:?}: {}",
+        args.iter()
+            .map(|a| a.as_ref().to_owned())
+            .collect::<Vec<_>>(),
+        String::from_utf8_lossy(&run.stderr)
+    );
+    String::from_utf8_lossy(&run.stdout).into_owned()
+}

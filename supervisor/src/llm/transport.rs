@@ -6,20 +6,42 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Write};
 use std::path::Path;
 use std::sync::Mutex;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use serde::{Deserialize, Serialize};
 
 use super::LlmConfig;
 use crate::error::SupervisorError;
 
-/// An HTTP reply: status and body text.
+/// An HTTP reply: status, body text and how long it took.
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct HttpReply {
     /// HTTP status code.
     pub status: u16,
     /// Body text.
     pub body: String,
+    /// Time from sending the request to the end of the reply, ms (`None`:
+    /// not measured, e.g. a recording made before latencies were kept).
+    /// Recorded and replayed, so that latency-dependent behaviour (the
+    /// simulated-time latency of asynchronous decisions) replays exactly.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub latency_ms: Option<u64>,
+}
+
+impl HttpReply {
+    /// A reply without a measured latency.
+    pub fn new(status: u16, body: impl Into<String>) -> Self {
+        Self {
+            status,
+            body: body.into(),
+            latency_ms: None,
+        }
+    }
+}
+
+/// Milliseconds since `t0`, saturating.
+pub(crate) fn millis_since(t0: Instant) -> u64 {
+    u64::try_from(t0.elapsed().as_millis()).unwrap_or(u64::MAX)
 }
 
 /// Why no reply arrived.
@@ -135,11 +157,164 @@ impl Transport for HttpTransport {
         if let Some(key) = &self.api_key {
             request = request.header("authorization", format!("Bearer {key}"));
         }
+        let t0 = Instant::now();
         let mut response = request.send(body).map_err(map_ureq)?;
         let status = response.status().as_u16();
         let body = response.body_mut().read_to_string().map_err(map_ureq)?;
-        Ok(HttpReply { status, body })
+        Ok(HttpReply {
+            status,
+            body,
+            latency_ms: Some(millis_since(t0)),
+        })
     }
+}
+
+/// Why the endpoint check ([`check_endpoint`]) failed.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum EndpointError {
+    /// Nothing answered at the URL.
+    #[error(
+        "cannot reach the LLM endpoint {url}: {message} (is the server running and listening there? the URL is the base up to /v1, e.g. http://127.0.0.1:8080/v1)"
+    )]
+    Unreachable {
+        /// The URL asked.
+        url: String,
+        /// The client's message.
+        message: String,
+    },
+    /// The server lists its models and the configured one is not among them.
+    #[error("the LLM endpoint {url} does not serve the model '{model}'; it serves: {available}")]
+    UnknownModel {
+        /// The URL asked.
+        url: String,
+        /// The configured model.
+        model: String,
+        /// The models the server lists.
+        available: String,
+    },
+    /// The server answered with an error status.
+    #[error("the LLM endpoint {url} answered HTTP {status}: {body}")]
+    Status {
+        /// The URL asked.
+        url: String,
+        /// The status code.
+        status: u16,
+        /// The body, cut to 200 bytes.
+        body: String,
+    },
+}
+
+/// `text` cut to at most `max` bytes at a character boundary.
+pub(crate) fn truncate_bytes(mut text: String, max: usize) -> String {
+    if text.len() > max {
+        let mut cut = max;
+        while !text.is_char_boundary(cut) {
+            cut -= 1;
+        }
+        text.truncate(cut);
+    }
+    text
+}
+
+/// Model ids of an OpenAI `GET /models` body (`{"data": [{"id": ...}]}`);
+/// `None` when the body is not such a list.
+fn model_ids(body: &str) -> Option<Vec<String>> {
+    let v: serde_json::Value = serde_json::from_str(body).ok()?;
+    v.get("data")?
+        .as_array()?
+        .iter()
+        .map(|m| m.get("id").and_then(|id| id.as_str()).map(str::to_owned))
+        .collect()
+}
+
+/// Checks, before a run, that `config.base_url` is an OpenAI-compatible
+/// endpoint serving `config.model`: `GET <base_url>/models` must answer, and
+/// when it lists models the configured one must be among them. A server
+/// without a models list (404 / 405) is asked one tiny chat completion
+/// (`max_tokens` 1) instead, which must succeed.
+///
+/// Returns the models the server lists (empty when it lists none).
+///
+/// # Errors
+/// [`EndpointError::Unreachable`] when nothing answers (connection refused,
+/// DNS, timeout), [`EndpointError::UnknownModel`] for a model the server
+/// does not list, [`EndpointError::Status`] for an error status (a wrong
+/// path, a missing API key).
+pub fn check_endpoint(config: &LlmConfig) -> Result<Vec<String>, EndpointError> {
+    let base = config.base_url.trim_end_matches('/').to_owned();
+    // Listing models is quick even on a busy server; a tiny completion may
+    // take a prompt's time.
+    let timeout =
+        Duration::try_from_secs_f64(config.timeout_s.min(30.0)).unwrap_or(Duration::from_secs(30));
+    let mut agent_config = ureq::Agent::config_builder()
+        .timeout_global(Some(timeout))
+        .http_status_as_error(false);
+    if !config.use_env_proxy {
+        agent_config = agent_config.proxy(None);
+    }
+    let agent: ureq::Agent = agent_config.build().into();
+    let key = config
+        .api_key_env
+        .as_deref()
+        .and_then(|var| std::env::var(var).ok())
+        .filter(|k| !k.is_empty());
+    let unreachable = |url: &str, e: ureq::Error| EndpointError::Unreachable {
+        url: url.to_owned(),
+        message: e.to_string(),
+    };
+    let url = format!("{base}/models");
+    let mut get = agent.get(&url);
+    if let Some(k) = &key {
+        get = get.header("authorization", format!("Bearer {k}"));
+    }
+    let mut response = get.call().map_err(|e| unreachable(&url, e))?;
+    let status = response.status().as_u16();
+    let body = response
+        .body_mut()
+        .read_to_string()
+        .map_err(|e| unreachable(&url, e))?;
+    if status == 200
+        && let Some(models) = model_ids(&body)
+    {
+        if models.is_empty() || models.iter().any(|m| m == &config.model) {
+            return Ok(models);
+        }
+        return Err(EndpointError::UnknownModel {
+            url: base,
+            model: config.model.clone(),
+            available: models.join(", "),
+        });
+    }
+    if !matches!(status, 404 | 405) {
+        return Err(EndpointError::Status {
+            url,
+            status,
+            body: truncate_bytes(body, 200),
+        });
+    }
+    // No models list: one tiny completion.
+    let url = format!("{base}/chat/completions");
+    let ping = serde_json::json!({
+        "model": config.model,
+        "max_tokens": 1,
+        "messages": [{"role": "user", "content": "ping"}],
+    })
+    .to_string();
+    let mut post = agent.post(&url).header("content-type", "application/json");
+    if let Some(k) = &key {
+        post = post.header("authorization", format!("Bearer {k}"));
+    }
+    let mut response = post.send(ping.as_str()).map_err(|e| unreachable(&url, e))?;
+    let status = response.status().as_u16();
+    if status == 200 {
+        return Ok(Vec::new());
+    }
+    let body = response.body_mut().read_to_string().unwrap_or_default();
+    Err(EndpointError::Status {
+        url,
+        status,
+        body: truncate_bytes(body, 200),
+    })
 }
 
 /// One line of a JSONL recording.
@@ -204,6 +379,19 @@ impl<T: Transport> Transport for RecordingTransport<T> {
 #[derive(Debug, Default)]
 pub struct ReplayTransport {
     replies: Mutex<HashMap<String, VecDeque<Result<HttpReply, TransportError>>>>,
+    first_request: Option<String>,
+}
+
+/// The request settings a recording was made with (from its first
+/// request), so that a replay can repeat them byte for byte.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RecordedSettings {
+    /// `model`.
+    pub model: String,
+    /// `temperature`.
+    pub temperature: f64,
+    /// `max_tokens` (`None`: not sent).
+    pub max_tokens: Option<u32>,
 }
 
 impl ReplayTransport {
@@ -220,6 +408,7 @@ impl ReplayTransport {
         };
         let file = File::open(path).map_err(io)?;
         let mut replies: HashMap<String, VecDeque<_>> = HashMap::new();
+        let mut first_request = None;
         for (i, line) in BufReader::new(file).lines().enumerate() {
             let line = line.map_err(io)?;
             if line.trim().is_empty() {
@@ -228,10 +417,26 @@ impl ReplayTransport {
             let ex: Exchange = serde_json::from_str(&line).map_err(|e| {
                 SupervisorError::MalformedData(format!("{}:{}: {e}", path.display(), i + 1))
             })?;
+            first_request.get_or_insert_with(|| ex.request.clone());
             replies.entry(ex.request).or_default().push_back(ex.reply);
         }
         Ok(Self {
             replies: Mutex::new(replies),
+            first_request,
+        })
+    }
+
+    /// The settings of the recording's first request (`None` for an empty
+    /// recording or a request without a model).
+    pub fn recorded_settings(&self) -> Option<RecordedSettings> {
+        let v: serde_json::Value = serde_json::from_str(self.first_request.as_deref()?).ok()?;
+        Some(RecordedSettings {
+            model: v.get("model")?.as_str()?.to_owned(),
+            temperature: v.get("temperature").and_then(serde_json::Value::as_f64)?,
+            max_tokens: v
+                .get("max_tokens")
+                .and_then(serde_json::Value::as_u64)
+                .and_then(|m| u32::try_from(m).ok()),
         })
     }
 }

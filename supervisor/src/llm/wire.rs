@@ -6,23 +6,26 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value, json};
 
-use crate::context::RegionSnapshot;
+use std::collections::HashMap;
+
+use crate::context::{Candidate, RegionSnapshot};
 use crate::label::normalize_label;
 use crate::policy::PolicyDecision;
 
 use super::LlmFailure;
 
-/// The system prompt: the asymmetric context-gate rule.
-pub const SYSTEM_PROMPT: &str = "You supervise a robot searching a building for an object of a target category. \
-You receive a JSON snapshot: the target, the objects around the robot (label, support = amount of evidence), \
-and candidate regions the robot could relocate to (cluster_id, graph distance in metres, objects near them). \
-Decide whether the robot should abandon its current region. Relocate ONLY when the objects around the robot \
-clearly contradict the kind of room where the target is usually found (for example a bedroom when looking for a toilet). \
-If the surroundings are relevant, mixed, sparse or uncertain, continue exploring. Only once leaving is justified, \
-choose the candidate whose objects are most compatible with the target, preferring nearer ones; a distant region \
-that merely looks more promising is never a reason to leave. \
-Answer with a single JSON object: {\"action\":\"continue_explore\"} or \
-{\"action\":\"relocate_cluster\",\"cluster_id\":N,\"reason\":\"...\"}, using only a cluster_id from the candidates.";
+/// The system prompt: the asymmetric context-gate rule and an answer
+/// example of each action that conforms to [`answer_schema`].
+pub const SYSTEM_PROMPT: &str = "You supervise a robot searching a building for a target object. \
+Input: the target; the objects around the robot (\"here\"), counted per label; candidate regions it could move to \
+(id; floor relative to the robot's: 0 same, 1 up, -1 down; path distance in m; objects near them, counted per label; \
+no objects on another floor means unexplored stairs). \
+Relocate ONLY when the objects here clearly contradict the kind of room where the target is found \
+(for example a bedroom when looking for a toilet); if they are relevant, mixed, sparse or uncertain, continue exploring. \
+When leaving, choose the candidate whose objects best fit the target, preferring nearer ones. \
+Answer one JSON object, for example {\"action\":\"continue_explore\",\"cluster_id\":null,\"reason\":\"a kitchen can hold a chair\"} \
+or {\"action\":\"relocate_cluster\",\"cluster_id\":2,\"reason\":\"a bedroom here; 2 has a sink\"}, \
+with a cluster_id from the candidates and a reason of a few words.";
 
 /// The action field of an answer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -48,41 +51,126 @@ pub struct LlmAnswer {
     pub reason: Option<String>,
 }
 
-fn round2(x: f64) -> f64 {
-    (x * 100.0).round() / 100.0
+fn round1(x: f64) -> f64 {
+    (x * 10.0).round() / 10.0
 }
 
-/// The compact JSON snapshot sent as the user message: labels normalised,
-/// numbers rounded to centimetres / hundredths so that equal situations give
+/// `{"label": count, ...}` of normalised labels, most frequent first (ties
+/// by label), as JSON text.
+fn label_counts<'a>(labels: impl Iterator<Item = &'a str>) -> String {
+    let mut counts: HashMap<String, u32> = HashMap::new();
+    for l in labels {
+        let name = normalize_label(l).unwrap_or_else(|| l.trim().to_lowercase());
+        *counts.entry(name).or_insert(0) += 1;
+    }
+    let mut sorted: Vec<(String, u32)> = counts.into_iter().collect();
+    sorted.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    let items: Vec<String> = sorted
+        .iter()
+        .map(|(label, n)| format!("{}:{n}", Value::String(label.clone())))
+        .collect();
+    format!("{{{}}}", items.join(","))
+}
+
+/// The labels of a candidate's objects within `radius_m` of it.
+fn near_labels(candidate: &Candidate, radius_m: f64) -> impl Iterator<Item = &str> {
+    candidate
+        .context
+        .iter()
+        .filter(move |o| o.distance_m <= radius_m)
+        .map(|o| o.label.as_str())
+}
+
+/// The compact JSON snapshot sent as the user message, keys in this order:
+/// `target`, `here` (the robot's objects counted per normalised label) and
+/// `candidates`, each `{id, floor, distance_m, objects}` with `id` its
+/// 1-based position (the answer's `cluster_id`), `floor` relative to the
+/// robot's, the distance rounded to decimetres and the objects within
+/// `candidate_radius_m` of it counted per label. Equal situations give
 /// byte-identical requests (and cache hits).
 ///
 /// # Complexity
 /// O(size of the snapshot).
-pub fn snapshot_json(snapshot: &RegionSnapshot) -> String {
-    let label = |l: &str| normalize_label(l).unwrap_or_else(|| l.trim().to_lowercase());
-    let local: Vec<Value> = snapshot
-        .local_context
-        .iter()
-        .map(|o| json!({"label": label(&o.label), "support": round2(o.support)}))
-        .collect();
-    let candidates: Vec<Value> = snapshot
+pub fn snapshot_json(snapshot: &RegionSnapshot, candidate_radius_m: f64) -> String {
+    let target =
+        normalize_label(&snapshot.target).unwrap_or_else(|| snapshot.target.trim().to_lowercase());
+    let here = label_counts(snapshot.local_context.iter().map(|o| o.label.as_str()));
+    let candidates: Vec<String> = snapshot
         .candidates
         .iter()
-        .map(|c| {
-            let ctx: Vec<Value> = c
-                .context
-                .iter()
-                .map(|o| json!({"label": label(&o.label), "support": round2(o.support), "distance_m": round2(o.distance_m)}))
-                .collect();
-            json!({"cluster_id": c.cluster_id, "distance_m": round2(c.distance_m), "context": ctx})
+        .enumerate()
+        .map(|(i, c)| {
+            format!(
+                "{{\"id\":{},\"floor\":{},\"distance_m\":{},\"objects\":{}}}",
+                i + 1,
+                c.floor,
+                json!(round1(c.distance_m)),
+                label_counts(near_labels(c, candidate_radius_m))
+            )
         })
         .collect();
-    json!({
-        "target": label(&snapshot.target),
-        "local_context": local,
-        "candidates": candidates,
-    })
-    .to_string()
+    format!(
+        "{{\"target\":{},\"here\":{here},\"candidates\":[{}]}}",
+        Value::String(target),
+        candidates.join(",")
+    )
+}
+
+/// The candidate an answer's `cluster_id` (a 1-based position in the
+/// snapshot, see [`snapshot_json`]) names.
+pub fn named_candidate(snapshot: &RegionSnapshot, id: u64) -> Option<&Candidate> {
+    let index = usize::try_from(id).ok()?.checked_sub(1)?;
+    snapshot.candidates.get(index)
+}
+
+/// Whether the candidate an asynchronous answer chose (`id`, a position in
+/// `asked`) still fits `current`: the same cluster id is offered, on the
+/// same floor, and its surroundings (labels within `radius_m`) overlap the
+/// ones the model saw by at least half (Jaccard; both empty counts as the
+/// same). Cluster ids are only meaningful within one snapshot, so the
+/// surroundings confirm it is the same region. Returns its position in
+/// `current` (1-based).
+///
+/// # Complexity
+/// O(size of both snapshots).
+pub fn still_fits(
+    id: u64,
+    asked: &RegionSnapshot,
+    current: &RegionSnapshot,
+    radius_m: f64,
+) -> Option<u64> {
+    let then = named_candidate(asked, id)?;
+    let (index, now) = current
+        .candidates
+        .iter()
+        .enumerate()
+        .find(|(_, c)| c.cluster_id == then.cluster_id)?;
+    if now.floor != then.floor {
+        return None;
+    }
+    let set = |c: &Candidate| -> std::collections::BTreeSet<String> {
+        near_labels(c, radius_m)
+            .map(|l| normalize_label(l).unwrap_or_else(|| l.trim().to_lowercase()))
+            .collect()
+    };
+    let (a, b) = (set(then), set(now));
+    let union = a.union(&b).count();
+    let common = a.intersection(&b).count();
+    (union == 0 || 2 * common >= union).then_some(index as u64 + 1)
+}
+
+/// Prompt and completion token counts of a chat-completions body
+/// (`usage`), 0 when absent.
+pub fn parse_usage(body: &str) -> (u64, u64) {
+    let Ok(v) = serde_json::from_str::<Value>(body) else {
+        return (0, 0);
+    };
+    let count = |k: &str| {
+        v.pointer(&format!("/usage/{k}"))
+            .and_then(Value::as_u64)
+            .unwrap_or(0)
+    };
+    (count("prompt_tokens"), count("completion_tokens"))
 }
 
 /// Keywords OpenAI's strict structured-output mode accepts; everything else
@@ -201,7 +289,8 @@ fn inline_refs(value: &mut Value, defs: &Map<String, Value>) {
 pub enum ResponseFormat {
     /// `response_format: {type: json_schema, json_schema: {strict: true, ...}}`.
     JsonSchema,
-    /// `response_format: {type: json_object}`, for servers without schemas.
+    /// `response_format: {type: json_object, schema}` with the schema in the
+    /// system prompt too, for servers without `json_schema`.
     JsonObject,
 }
 
@@ -216,12 +305,22 @@ pub fn request_body(
     snapshot_json: &str,
     format: ResponseFormat,
 ) -> String {
-    let response_format = match format {
-        ResponseFormat::JsonSchema => json!({
-            "type": "json_schema",
-            "json_schema": {"name": "supervisor_decision", "strict": true, "schema": answer_schema()},
-        }),
-        ResponseFormat::JsonObject => json!({"type": "json_object"}),
+    let schema = answer_schema();
+    let (response_format, system) = match format {
+        ResponseFormat::JsonSchema => (
+            json!({
+                "type": "json_schema",
+                "json_schema": {"name": "supervisor_decision", "strict": true, "schema": schema},
+            }),
+            SYSTEM_PROMPT.to_owned(),
+        ),
+        // Servers without json_schema: the schema in the prompt, and in
+        // `schema` for servers that constrain json_object with it
+        // (llama-cpp-python).
+        ResponseFormat::JsonObject => (
+            json!({"type": "json_object", "schema": schema}),
+            format!("{SYSTEM_PROMPT} JSON schema of the answer: {schema}"),
+        ),
     };
     let mut body = Map::new();
     body.insert("model".into(), json!(model));
@@ -232,7 +331,7 @@ pub fn request_body(
     body.insert(
         "messages".into(),
         json!([
-            {"role": "system", "content": SYSTEM_PROMPT},
+            {"role": "system", "content": system},
             {"role": "user", "content": snapshot_json},
         ]),
     );
@@ -286,11 +385,13 @@ fn clip(text: &str, max: usize) -> String {
     }
 }
 
-/// Validates an answer against the snapshot it answers.
+/// Validates an answer against the snapshot it answers; the answer's
+/// `cluster_id` is a candidate's position in [`snapshot_json`] (1-based),
+/// the decision names the candidate's real cluster id.
 ///
 /// # Errors
 /// [`LlmFailure::InvalidAnswer`] for a relocation without a cluster id,
-/// [`LlmFailure::UnknownCluster`] for a cluster id not among the candidates.
+/// [`LlmFailure::UnknownCluster`] for an id not among the candidates.
 pub fn validate_answer(
     answer: &LlmAnswer,
     snapshot: &RegionSnapshot,
@@ -305,13 +406,13 @@ pub fn validate_answer(
             let id = answer.cluster_id.ok_or_else(|| {
                 LlmFailure::InvalidAnswer("relocate_cluster without cluster_id".into())
             })?;
-            if snapshot.candidate(id).is_none() {
-                return Err(LlmFailure::UnknownCluster(id));
-            }
+            let cluster = named_candidate(snapshot, id)
+                .ok_or(LlmFailure::UnknownCluster(id))?
+                .cluster_id;
             Ok(PolicyDecision::relocate(
-                id,
+                cluster,
                 format!(
-                    "model: relocate to cluster {id} ({})",
+                    "model: relocate to cluster {cluster} ({})",
                     reason.as_deref().unwrap_or("no reason given")
                 ),
             ))
