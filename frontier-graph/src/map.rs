@@ -1054,12 +1054,6 @@ pub fn path_cells(path: &[Point3<f64>], resolution: f64) -> impl Iterator<Item =
 /// `what = "void"` and the first bad void's index.
 pub(crate) fn check_voids(voids: &[Point2<f64>], res: f64) -> Result<(), FrontierError> {
     for (index, v) in voids.iter().enumerate() {
-        if !(v.x.is_finite() && v.y.is_finite()) {
-            return Err(FrontierError::NonFinite {
-                what: "void",
-                index,
-            });
-        }
         cell_of(v, res, "void", index)?;
     }
     Ok(())

@@ -44,6 +44,24 @@ fn check_traversability(map: &FrontierMap) -> Result<(), TestCaseError> {
     Ok(())
 }
 
+/// The incrementally maintained G_F of `map` equals a rebuild from scratch
+/// at `robot`: the same nodes (by cells) and the same edge costs.
+fn check_equals_rebuild(
+    map: &FrontierMap,
+    robot: &Point2<f64>,
+    ctx: &str,
+) -> Result<(), TestCaseError> {
+    let mut rebuilt = map.clone();
+    rebuilt.rebuild();
+    rebuilt.frontier_graph(robot).unwrap();
+    let a: BTreeSet<Vec<Cell>> = map.graph().nodes().map(|n| n.cells.clone()).collect();
+    let b: BTreeSet<Vec<Cell>> = rebuilt.graph().nodes().map(|n| n.cells.clone()).collect();
+    prop_assert_eq!(a, b, "{}", ctx);
+    let diff = cost_diff(map, &rebuilt);
+    prop_assert!(diff.is_empty(), "{}: {:?}", ctx, diff);
+    Ok(())
+}
+
 fn cost_diff(a: &FrontierMap, b: &FrontierMap) -> Vec<String> {
     let (ca, cb) = (costs_by_cells(a), costs_by_cells(b));
     let keys: BTreeSet<_> = ca.keys().chain(cb.keys()).cloned().collect();
@@ -217,14 +235,7 @@ proptest! {
             let (px, py) = poses[k % poses.len()];
             let robot = Point2::new(px, py);
             map.frontier_graph(&robot).unwrap();
-            let mut rebuilt = map.clone();
-            rebuilt.rebuild();
-            rebuilt.frontier_graph(&robot).unwrap();
-            let a: BTreeSet<Vec<Cell>> = map.graph().nodes().map(|n| n.cells.clone()).collect();
-            let b: BTreeSet<Vec<Cell>> = rebuilt.graph().nodes().map(|n| n.cells.clone()).collect();
-            prop_assert_eq!(a, b);
-            let diff = cost_diff(&map, &rebuilt);
-            prop_assert!(diff.is_empty(), "step {}: {:?}", k, diff);
+            check_equals_rebuild(&map, &robot, &format!("step {k}"))?;
         }
     }
 
@@ -367,14 +378,7 @@ proptest! {
         }
         check_traversability(&map)?;
         let robot = *origins.last().unwrap();
-        let mut rebuilt = map.clone();
-        rebuilt.rebuild();
-        rebuilt.frontier_graph(&robot).unwrap();
-        let a: BTreeSet<Vec<Cell>> = map.graph().nodes().map(|n| n.cells.clone()).collect();
-        let b: BTreeSet<Vec<Cell>> = rebuilt.graph().nodes().map(|n| n.cells.clone()).collect();
-        prop_assert_eq!(a, b);
-        let diff = cost_diff(&map, &rebuilt);
-        prop_assert!(diff.is_empty(), "{:?}", diff);
+        check_equals_rebuild(&map, &robot, "after the contacts")?;
         let json = serde_json::to_string(&map).unwrap();
         let back: FrontierMap = serde_json::from_str(&json).unwrap();
         let restored: BTreeSet<Cell> = back.grid().contacts().collect();

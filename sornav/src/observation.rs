@@ -279,9 +279,7 @@ impl Observation {
             // From the bottom row up: nearer floor first.
             let mut edge = false;
             run.clear();
-            let mut rows: Vec<usize> = (0..h).step_by(stride).collect();
-            rows.reverse();
-            for v in rows {
+            for v in (0..h).step_by(stride).rev() {
                 let z = d.depth[v * w + u];
                 let (x, y) = (u as f64, v as f64);
                 if z.is_finite() && z > 0.0 {
