@@ -6,7 +6,12 @@
 //! * **Odometry** (`/state_estimation`) gives the base pose (through the
 //!   LiDAR extrinsic when the odometry is the sensor's) and the sensor
 //!   origin. The agent is created at the first odometry message, with the
-//!   floor at the base height unless `inputs.floor_z` is set.
+//!   floor at the base height unless `inputs.floor_z` is set. A message
+//!   whose header stamp is more than `rates.odometry_max_age_s` older, or
+//!   `rates.odometry_max_future_s` newer, than the wall clock on receipt
+//!   (a delayed, replayed or zero-stamped pose; clock skew) is rejected
+//!   ([`BridgeError::StaleOdometry`], [`BridgeError::FutureOdometry`]) and
+//!   its pose is not used.
 //! * **Clouds**: `/semantic_scan` points (with their `label`) are buffered;
 //!   `/registered_scan` returns and `/terrain_map` cells (re-projected to the
 //!   floor plus their height above ground) are buffered as *unlabelled*
@@ -109,6 +114,26 @@ pub enum BridgeError {
     /// The odometry pose is not finite or its quaternion is degenerate.
     #[error("odometry pose is not finite or its orientation is degenerate")]
     BadOdometry,
+    /// The odometry header stamp is older than `rates.odometry_max_age_s`
+    /// when received (a delayed or replayed message, or a zero stamp).
+    #[error("odometry stamp is {age_s:.3} s old, more than rates.odometry_max_age_s = {max_s} s")]
+    StaleOdometry {
+        /// Age of the stamp on receipt (s).
+        age_s: f64,
+        /// The tolerance (s).
+        max_s: f64,
+    },
+    /// The odometry header stamp is further ahead of the node's clock than
+    /// `rates.odometry_max_future_s` (clock skew between computers).
+    #[error(
+        "odometry stamp is {ahead_s:.3} s in the future, more than rates.odometry_max_future_s = {max_s} s"
+    )]
+    FutureOdometry {
+        /// How far ahead of the receiving clock the stamp is (s).
+        ahead_s: f64,
+        /// The tolerance (s).
+        max_s: f64,
+    },
     /// A cloud arrived before any odometry (no sensor origin yet).
     #[error("cloud on {0} before the first odometry message")]
     NoOdometry(&'static str),
@@ -124,14 +149,16 @@ impl BridgeError {
     /// A short stable name of the error's kind (with the topic where it
     /// has one), under which rejections are counted in
     /// [`Status::rejections`]: `frame:<topic>`, `cloud:<topic>`,
-    /// `bad_odometry`, `no_odometry:<topic>`, `blank_target`, `agent`,
-    /// `config`.
+    /// `bad_odometry`, `stale_odometry`, `future_odometry`,
+    /// `no_odometry:<topic>`, `blank_target`, `agent`, `config`.
     pub fn cause(&self) -> String {
         match self {
             BridgeError::Config(_) => "config".into(),
             BridgeError::Cloud { topic, .. } => format!("cloud:{topic}"),
             BridgeError::Frame { topic, .. } => format!("frame:{topic}"),
             BridgeError::BadOdometry => "bad_odometry".into(),
+            BridgeError::StaleOdometry { .. } => "stale_odometry".into(),
+            BridgeError::FutureOdometry { .. } => "future_odometry".into(),
             BridgeError::NoOdometry(topic) => format!("no_odometry:{topic}"),
             BridgeError::BlankTarget => "blank_target".into(),
             BridgeError::Agent(_) => "agent".into(),
@@ -379,6 +406,13 @@ fn secs(d: Duration) -> f64 {
     d.as_secs_f64()
 }
 
+/// `a - b` in seconds (exact in integer nanoseconds, then converted; a
+/// malformed `nanosec` of 1e9 or more is taken as it is).
+fn stamp_difference_s(a: Time, b: Time) -> f64 {
+    let ns = |t: Time| i64::from(t.sec) * 1_000_000_000 + i64::from(t.nanosec);
+    (ns(a) - ns(b)) as f64 / 1e9
+}
+
 fn due(last: Option<Duration>, now: Duration, period_s: f64) -> bool {
     last.is_none_or(|t| now.saturating_sub(t).as_secs_f64() + 1e-9 >= period_s)
 }
@@ -542,13 +576,48 @@ impl Bridge {
         Ok(())
     }
 
-    /// `/state_estimation`.
+    /// `/state_estimation`, received now: [`on_odometry_at`](Self::on_odometry_at)
+    /// with the wall clock ([`Time::now`]) as the time of receipt.
     ///
     /// # Errors
-    /// [`BridgeError::Frame`], [`BridgeError::BadOdometry`] (counted; the
-    /// pose is not used).
+    /// As [`on_odometry_at`](Self::on_odometry_at).
     pub fn on_odometry(&mut self, msg: &Odometry, now: Duration) -> Result<(), BridgeError> {
+        self.on_odometry_at(msg, now, Time::now())
+    }
+
+    /// `/state_estimation`, received at wall-clock time `received` (the
+    /// clock its header stamp is compared with; `now` is the node's
+    /// monotonic clock, as everywhere in the bridge).
+    ///
+    /// # Errors
+    /// [`BridgeError::Frame`]; [`BridgeError::StaleOdometry`] when the
+    /// stamp is more than `rates.odometry_max_age_s` older than `received`
+    /// (a zero stamp is); [`BridgeError::FutureOdometry`] when it is more
+    /// than `rates.odometry_max_future_s` ahead; [`BridgeError::BadOdometry`].
+    /// Each is counted by cause and the pose is not used.
+    pub fn on_odometry_at(
+        &mut self,
+        msg: &Odometry,
+        now: Duration,
+        received: Time,
+    ) -> Result<(), BridgeError> {
         self.check_frame("odometry", &msg.header, now)?;
+        let age_s = stamp_difference_s(received, msg.header.stamp);
+        let rates = self.config.rates;
+        if age_s > rates.odometry_max_age_s {
+            let e = BridgeError::StaleOdometry {
+                age_s,
+                max_s: rates.odometry_max_age_s,
+            };
+            return Err(self.reject(e, now));
+        }
+        if -age_s > rates.odometry_max_future_s {
+            let e = BridgeError::FutureOdometry {
+                ahead_s: -age_s,
+                max_s: rates.odometry_max_future_s,
+            };
+            return Err(self.reject(e, now));
+        }
         let p = msg.pose.pose.position;
         let Some(q) = msg.pose.pose.orientation.to_unit() else {
             return Err(self.reject(BridgeError::BadOdometry, now));

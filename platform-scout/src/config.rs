@@ -327,6 +327,10 @@ impl Default for ArrivalConfig {
     }
 }
 
+/// Largest `rates.odometry_max_age_s` and `rates.odometry_max_future_s`
+/// (s): one hour.
+pub const MAX_ODOMETRY_STAMP_TOLERANCE_S: f64 = 3600.0;
+
 /// Rates of the node.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
@@ -343,6 +347,15 @@ pub struct RatesConfig {
     pub markers_period_s: f64,
     /// Consider odometry stale after this long (s): the node holds.
     pub odometry_timeout_s: f64,
+    /// Reject an odometry message whose header stamp is older than this
+    /// when it is received (s, against the node's wall clock): a delayed,
+    /// replayed or zero-stamped pose is counted (`stale_odometry`), not
+    /// used. At most one hour.
+    pub odometry_max_age_s: f64,
+    /// Reject an odometry message stamped further than this ahead of the
+    /// node's wall clock (s; clock skew between computers): counted
+    /// (`future_odometry`), not used. At most one hour.
+    pub odometry_max_future_s: f64,
 }
 
 impl Default for RatesConfig {
@@ -353,6 +366,8 @@ impl Default for RatesConfig {
             waypoint_republish_s: 1.0,
             markers_period_s: 2.0,
             odometry_timeout_s: 1.0,
+            odometry_max_age_s: 1.0,
+            odometry_max_future_s: 0.5,
         }
     }
 }
@@ -561,6 +576,18 @@ impl ScoutConfig {
         positive("rates.waypoint_republish_s", r.waypoint_republish_s)?;
         positive("rates.markers_period_s", r.markers_period_s)?;
         positive("rates.odometry_timeout_s", r.odometry_timeout_s)?;
+        for (field, v) in [
+            ("rates.odometry_max_age_s", r.odometry_max_age_s),
+            ("rates.odometry_max_future_s", r.odometry_max_future_s),
+        ] {
+            positive(field, v)?;
+            if v > MAX_ODOMETRY_STAMP_TOLERANCE_S {
+                return Err(invalid(
+                    field,
+                    format!("must be at most {MAX_ODOMETRY_STAMP_TOLERANCE_S} s, got {v}"),
+                ));
+            }
+        }
         if r.control_hz > 50.0 || r.observe_hz > 50.0 {
             return Err(invalid(
                 "rates",

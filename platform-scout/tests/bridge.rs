@@ -28,8 +28,19 @@ fn xyzi(pts: &[[f64; 4]], frame: &str) -> PointCloud2 {
     encode_xyzi(Header::new(Time::default(), frame), pts).unwrap()
 }
 
+/// Odometry stamped with the wall clock (the bridge rejects stale stamps).
 fn odom(x: f64, y: f64, yaw: f64) -> Odometry {
-    common::odometry(Header::new(Time::default(), "map"), x, y, yaw)
+    common::odometry(Header::new(Time::now(), "map"), x, y, yaw)
+}
+
+/// Odometry stamped `stamp`.
+fn odom_at(stamp: Time) -> Odometry {
+    common::odometry(Header::new(stamp, "map"), 0.0, 0.0, 0.0)
+}
+
+/// A wall-clock reading `s` seconds after an arbitrary fixed time.
+fn wall(s: f64) -> Time {
+    Time::from_duration(Duration::from_secs(1_800_000_000) + Duration::from_secs_f64(s))
 }
 
 fn config() -> ScoutConfig {
@@ -120,6 +131,86 @@ fn odometry_of_the_lidar_frame_gives_the_base_pose() {
     assert_eq!(b.stats().rejected_messages, 2);
 }
 
+/// Tolerances of 1 s (stale) and 0.5 s (future), the defaults, stated.
+fn stamp_config() -> ScoutConfig {
+    let mut c = config();
+    c.rates.odometry_max_age_s = 1.0;
+    c.rates.odometry_max_future_s = 0.5;
+    c
+}
+
+#[test]
+fn stale_odometry_is_rejected_and_counted() {
+    let mut b = Bridge::new(stamp_config()).unwrap();
+    // 1.5 s old on receipt: rejected, not used (no agent, no pose).
+    let e = b.on_odometry_at(&odom_at(wall(0.0)), ms(0), wall(1.5));
+    assert!(
+        matches!(e, Err(BridgeError::StaleOdometry { age_s, max_s })
+            if (age_s - 1.5).abs() < 1e-9 && max_s == 1.0),
+        "{e:?}"
+    );
+    // A zero stamp (never set) is stale.
+    assert!(matches!(
+        b.on_odometry_at(&odom_at(Time::default()), ms(10), wall(0.0)),
+        Err(BridgeError::StaleOdometry { .. })
+    ));
+    // So is an hour-old one through the wall-clock entry point.
+    let hour_ago = Time::from_system_time(std::time::SystemTime::now() - Duration::from_secs(3600));
+    assert!(matches!(
+        b.on_odometry(&odom_at(hour_ago), ms(20)),
+        Err(BridgeError::StaleOdometry { .. })
+    ));
+    let s = b.status(ms(20));
+    assert_eq!(s.state, NodeState::WaitingForOdometry);
+    assert!(s.pose.is_none() && b.agent().is_none());
+    assert_eq!(s.bridge.odometry, 0);
+    assert_eq!(s.bridge.rejected_messages, 3);
+    assert_eq!(s.rejections.get("stale_odometry"), Some(&3));
+    assert!(s.last_error.unwrap().contains("rates.odometry_max_age_s"));
+}
+
+#[test]
+fn future_odometry_is_rejected_and_counted() {
+    let mut b = Bridge::new(stamp_config()).unwrap();
+    let e = b.on_odometry_at(&odom_at(wall(10.75)), ms(0), wall(10.0));
+    assert!(
+        matches!(e, Err(BridgeError::FutureOdometry { ahead_s, max_s })
+            if (ahead_s - 0.75).abs() < 1e-9 && max_s == 0.5),
+        "{e:?}"
+    );
+    assert_eq!(e.unwrap_err().cause(), "future_odometry");
+    let s = b.status(ms(0));
+    assert!(s.pose.is_none() && b.agent().is_none());
+    assert_eq!(s.rejections.get("future_odometry"), Some(&1));
+    assert_eq!(s.bridge.rejected_messages, 1);
+}
+
+#[test]
+fn odometry_within_the_stamp_tolerances_is_used() {
+    let mut b = Bridge::new(stamp_config()).unwrap();
+    // 0.9 s old, 0.4 s ahead, then exactly 1 s old and exactly 0.5 s
+    // ahead (on the limits): all used.
+    for (i, (stamp, received)) in [(0.0, 0.9), (10.4, 10.0), (20.0, 21.0), (30.5, 30.0)]
+        .into_iter()
+        .enumerate()
+    {
+        b.on_odometry_at(&odom_at(wall(stamp)), ms(i as u64 * 100), wall(received))
+            .unwrap();
+    }
+    let s = b.status(ms(300));
+    assert_eq!(s.bridge.odometry, 4);
+    assert_eq!(s.bridge.rejected_messages, 0);
+    assert!(s.rejections.is_empty());
+    assert_eq!(s.state, NodeState::Idle);
+    // A stale message between fresh ones keeps the last good pose.
+    assert!(
+        b.on_odometry_at(&odom_at(wall(0.0)), ms(400), wall(40.0))
+            .is_err()
+    );
+    assert_eq!(b.status(ms(400)).bridge.odometry, 4);
+    assert_eq!(b.state(), NodeState::Idle);
+}
+
 #[test]
 fn bad_inputs_are_rejected_and_counted() {
     let mut b = Bridge::new(config()).unwrap();
@@ -196,6 +287,15 @@ fn rejections_are_counted_by_cause_and_logged_at_a_limited_rate() {
         assert!(b.on_odometry(&wrong, ms(5_000)).is_err());
         b.on_undecodable("odometry", "buffer too short", ms(100));
         b.on_undecodable("odometry", "buffer too short", ms(200));
+        // stale and future stamps: a cause each, one warning per burst
+        for t in 0..3 {
+            let stale = b.on_odometry_at(&odom_at(wall(0.0)), ms(1_000 + t * 100), wall(2.0));
+            assert!(stale.is_err());
+        }
+        assert!(
+            b.on_odometry_at(&odom_at(wall(3.0)), ms(1_500), wall(2.0))
+                .is_err()
+        );
         assert!(
             b.on_target(&RosString { data: " ".into() }, ms(300))
                 .is_err()
@@ -206,12 +306,14 @@ fn rejections_are_counted_by_cause_and_logged_at_a_limited_rate() {
         ("frame:odometry", 51),
         ("undecodable:odometry", 2),
         ("blank_target", 1),
+        ("stale_odometry", 3),
+        ("future_odometry", 1),
     ]
     .into_iter()
     .map(|(k, v)| (k.to_owned(), v))
     .collect();
     assert_eq!(s.rejections, expect);
-    assert_eq!(s.bridge.rejected_messages, 52);
+    assert_eq!(s.bridge.rejected_messages, 56);
     assert_eq!(s.bridge.undecodable_samples, 2);
     let log = sink.text();
     let lines = |needle: &str| log.lines().filter(|l| l.contains(needle)).count();
@@ -221,6 +323,8 @@ fn rejections_are_counted_by_cause_and_logged_at_a_limited_rate() {
     assert!(log.contains("not_logged=49"), "{log}");
     assert_eq!(lines("failed to decode"), 1, "{log}");
     assert_eq!(lines("blank target"), 1, "{log}");
+    assert_eq!(lines("more than rates.odometry_max_age_s"), 1, "{log}");
+    assert_eq!(lines("more than rates.odometry_max_future_s"), 1, "{log}");
     assert!(log.lines().all(|l| l.contains("WARN")), "{log}");
 }
 

@@ -67,6 +67,26 @@ fn invalid(text: &str) -> String {
 #[test]
 fn invalid_configurations_name_the_field() {
     assert_eq!(
+        invalid("[rates]\nodometry_max_age_s = 0.0"),
+        "rates.odometry_max_age_s"
+    );
+    assert_eq!(
+        invalid("[rates]\nodometry_max_age_s = nan"),
+        "rates.odometry_max_age_s"
+    );
+    assert_eq!(
+        invalid("[rates]\nodometry_max_age_s = 3601.0"),
+        "rates.odometry_max_age_s"
+    );
+    assert_eq!(
+        invalid("[rates]\nodometry_max_future_s = -1.0"),
+        "rates.odometry_max_future_s"
+    );
+    assert_eq!(
+        invalid("[rates]\nodometry_max_future_s = inf"),
+        "rates.odometry_max_future_s"
+    );
+    assert_eq!(
         invalid("[robot]\nfootprint = [[0.3, 0.3], [-0.3, 0.3]]"),
         "robot.footprint"
     );
