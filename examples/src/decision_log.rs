@@ -83,8 +83,9 @@ impl DecisionLog {
     /// Checks the log against Algorithm 1's ordering:
     ///
     /// 1. **target first**: STOP comes last, right after the target was
-    ///    verified (`TargetVerification`), which itself follows an approach
-    ///    (`TargetAccepted`);
+    ///    verified (`TargetVerification`) or after moves to a view point
+    ///    of the verified target (`StopInView`); a verification itself
+    ///    follows an approach (`TargetAccepted`);
     /// 2. **an active relocation is kept**: every later decision about a
     ///    relocation mission is `RelocationActive` (never re-evaluated by
     ///    the policy or the rate limit);
@@ -110,6 +111,11 @@ impl DecisionLog {
                     }
                     if i + 1 != runs.len() {
                         return fail("decisions after STOP");
+                    }
+                }
+                DecisionStep::StopInView => {
+                    if !verified {
+                        return fail("a move to a view point before the target was verified");
                     }
                 }
                 DecisionStep::TargetVerification => {
@@ -152,8 +158,12 @@ impl DecisionLog {
                     last_policy = Some(d.until);
                 }
             }
-            if d.step != DecisionStep::TargetVerification && d.step != DecisionStep::TargetConfirmed
-            {
+            if !matches!(
+                d.step,
+                DecisionStep::TargetVerification
+                    | DecisionStep::TargetConfirmed
+                    | DecisionStep::StopInView
+            ) {
                 verified = verified && d.step == DecisionStep::TargetVerification;
             }
         }

@@ -769,7 +769,7 @@ fn load_scenes(
 
 /// The work items (scene, episode, variant) in a fixed order, kept to
 /// `options.shard`, and the (scene, episode) pairs whose maps are saved:
-/// the first `config.maps` episodes.
+/// the first `config.maps` episodes of the shard.
 fn work_items(
     config: &EvalConfig,
     options: &RunOptions,
@@ -787,14 +787,6 @@ fn work_items(
             }
         }
     }
-    // Maps: the first `maps` episodes (in order) of every variant.
-    let map_episodes: HashSet<(usize, usize)> = items
-        .iter()
-        .map(|w| (w.scene, w.episode))
-        .collect::<BTreeSet<_>>()
-        .into_iter()
-        .take(config.maps)
-        .collect();
     if let Some((i, n)) = options.shard {
         items = items
             .into_iter()
@@ -803,6 +795,15 @@ fn work_items(
             .map(|(_, w)| w)
             .collect();
     }
+    // Maps: the first `maps` episodes (in order) of every variant that
+    // this shard runs.
+    let map_episodes: HashSet<(usize, usize)> = items
+        .iter()
+        .map(|w| (w.scene, w.episode))
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .take(config.maps)
+        .collect();
     (items, map_episodes)
 }
 

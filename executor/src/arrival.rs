@@ -10,7 +10,8 @@ pub fn angle_difference(a: f64, b: f64) -> f64 {
 
 /// Whether the robot at `pose` has reached `mission` under `rule`:
 ///
-/// * horizontal distance to the waypoint `<= radius_m`,
+/// * horizontal distance to the waypoint `<= radius_m` (or the mission's
+///   tighter [`arrival_radius_m`](Mission::arrival_radius_m)),
 /// * vertical offset `<= vertical_tolerance_m`,
 /// * and, when the rule has a heading tolerance and the mission a
 ///   [`look_at`](Mission::look_at) point, the heading toward that point (in
@@ -30,10 +31,16 @@ pub fn angle_difference(a: f64, b: f64) -> f64 {
 ///     .with_look_at(Point3::new(2.0, 0.0, 0.5));
 /// assert!(arrived(&RobotPose::new(Point3::new(0.8, 0.0, 0.0), 0.0), &m, &rule));
 /// assert!(!arrived(&RobotPose::new(Point3::new(0.8, 0.0, 0.0), 3.0), &m, &rule)); // facing away
+/// // A mission's own tighter radius applies.
+/// let tight = m.clone().with_arrival_radius(0.1);
+/// assert!(!arrived(&RobotPose::new(Point3::new(0.8, 0.0, 0.0), 0.0), &tight, &rule));
 /// ```
 pub fn arrived(pose: &RobotPose, mission: &Mission, rule: &ArrivalRule) -> bool {
     let d = mission.waypoint - pose.position;
-    if d.x.hypot(d.y) > rule.radius_m || d.z.abs() > rule.vertical_tolerance_m {
+    let radius = mission
+        .arrival_radius_m
+        .map_or(rule.radius_m, |r| r.min(rule.radius_m));
+    if d.x.hypot(d.y) > radius || d.z.abs() > rule.vertical_tolerance_m {
         return false;
     }
     match (rule.heading_tolerance_rad, mission.look_at) {

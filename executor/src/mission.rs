@@ -58,6 +58,12 @@ pub struct Mission {
     /// [`ArrivalRule::heading_tolerance_rad`](crate::ArrivalRule::heading_tolerance_rad)
     /// is set (typically the object centre of a `NavToObject`).
     pub look_at: Option<Point3<f64>>,
+    /// A tighter arrival radius (m) than the kind's
+    /// [`ArrivalRule::radius_m`](crate::ArrivalRule::radius_m), for a
+    /// mission whose end point matters (a view point of a confirmed
+    /// target); the smaller of the two applies.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub arrival_radius_m: Option<f64>,
 }
 
 impl Mission {
@@ -68,6 +74,7 @@ impl Mission {
             waypoint,
             path: None,
             look_at: None,
+            arrival_radius_m: None,
         }
     }
 
@@ -83,7 +90,14 @@ impl Mission {
         self
     }
 
-    /// Checks that every coordinate is finite and a given path is not empty.
+    /// Sets a tighter arrival radius (see the field).
+    pub fn with_arrival_radius(mut self, radius_m: f64) -> Self {
+        self.arrival_radius_m = Some(radius_m);
+        self
+    }
+
+    /// Checks that every coordinate is finite, a given path is not empty
+    /// and a given arrival radius is finite and positive.
     ///
     /// # Errors
     /// [`ExecError::InvalidMission`].
@@ -93,6 +107,14 @@ impl Mission {
         }
         if self.look_at.as_ref().is_some_and(|p| !finite(p)) {
             return Err(ExecError::InvalidMission("non-finite look_at point"));
+        }
+        if self
+            .arrival_radius_m
+            .is_some_and(|r| !(r.is_finite() && r > 0.0))
+        {
+            return Err(ExecError::InvalidMission(
+                "arrival radius must be finite and > 0",
+            ));
         }
         match &self.path {
             Some(path) if path.is_empty() => Err(ExecError::InvalidMission("empty path")),

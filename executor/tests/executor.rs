@@ -195,6 +195,30 @@ fn nav_to_object_needs_heading() {
 }
 
 #[test]
+fn a_mission_can_ask_for_a_tighter_arrival() {
+    let mut e = exec(ExecutorConfig::default());
+    let m = far(nav(3))
+        .with_look_at(Point3::new(21.0, 0.0, 0.5))
+        .with_arrival_radius(0.1);
+    e.submit(m).unwrap();
+    // Within the kind's 0.5 m but not the mission's 0.1 m.
+    let near = RobotPose::new(Point3::new(19.8, 0.0, 0.0), 0.0);
+    assert_eq!(e.tick(&near, &AlwaysValid).unwrap(), None);
+    let at = RobotPose::new(Point3::new(19.95, 0.0, 0.0), 0.0);
+    assert!(
+        e.tick(&at, &AlwaysValid)
+            .unwrap()
+            .unwrap()
+            .is_target_arrival()
+    );
+    // A looser one than the kind's does not loosen the kind's rule.
+    let mut e = exec(ExecutorConfig::default());
+    e.submit(far(nav(3)).with_arrival_radius(5.0)).unwrap();
+    let off = RobotPose::new(Point3::new(18.0, 0.0, 0.0), 0.0);
+    assert_eq!(e.tick(&off, &AlwaysValid).unwrap(), None);
+}
+
+#[test]
 fn each_failure_has_its_reason() {
     let cfg = ExecutorConfig {
         stuck_window_s: 5.0,
@@ -333,6 +357,9 @@ fn bad_inputs_are_errors() {
     assert!(e.submit(far(explore(1)).with_path(vec![])).is_err());
     assert!(e.submit(far(explore(1)).with_path(vec![nan])).is_err());
     assert!(e.submit(far(nav(1)).with_look_at(nan)).is_err());
+    for r in [0.0, -1.0, f64::NAN, f64::INFINITY] {
+        assert!(e.submit(far(nav(1)).with_arrival_radius(r)).is_err(), "{r}");
+    }
     assert!(e.active().is_none());
     e.submit(far(explore(1))).unwrap();
     assert_eq!(

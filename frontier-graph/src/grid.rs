@@ -272,6 +272,46 @@ impl OccupancyGrid {
         cell_of(p, self.cfg.resolution, "point", 0)
     }
 
+    /// Whether every cell the segment `a -> b` passes through (both end
+    /// cells included, in order; Amanatides & Woo traversal) satisfies
+    /// `pass`: e.g. a line of sight that only some cells may block.
+    ///
+    /// # Errors
+    /// For non-finite or out-of-range end points.
+    ///
+    /// # Complexity
+    /// O(L) for a segment crossing L cells.
+    ///
+    /// # Example
+    /// ```
+    /// use nalgebra::Point2;
+    /// use sornav_frontier_graph::{Cell, GridConfig, OccupancyGrid};
+    /// let grid = OccupancyGrid::new(GridConfig::default()).unwrap(); // 5 cm cells
+    /// let mut cells = Vec::new();
+    /// let (a, b) = (Point2::new(0.01, 0.01), Point2::new(0.12, 0.06));
+    /// assert!(grid.segment_all(&a, &b, |c| { cells.push(c); true }).unwrap());
+    /// // 4-connected, from the start cell to the end cell.
+    /// assert_eq!(cells.first(), Some(&Cell::new(0, 0)));
+    /// assert_eq!(cells.last(), Some(&Cell::new(2, 1)));
+    /// assert_eq!(cells.len(), 4);
+    /// assert!(!grid.segment_all(&a, &b, |c| c.x < 2).unwrap());
+    /// assert!(grid.segment_all(&a, &Point2::new(f64::NAN, 0.0), |_| true).is_err());
+    /// ```
+    pub fn segment_all(
+        &self,
+        a: &Point2<f64>,
+        b: &Point2<f64>,
+        mut pass: impl FnMut(Cell) -> bool,
+    ) -> Result<bool, FrontierError> {
+        self.cell_of(a)?;
+        self.cell_of(b)?;
+        let mut all = true;
+        traverse(a, b, self.cfg.resolution, |c| {
+            all = all && pass(c);
+        });
+        Ok(all)
+    }
+
     /// World centre of `cell`.
     pub fn cell_center(&self, cell: Cell) -> Point2<f64> {
         cell_center(cell, self.cfg.resolution)

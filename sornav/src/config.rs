@@ -102,16 +102,50 @@ pub struct ApproachConfig {
     /// bounds (default 0: as close as traversable). A camera looking level
     /// sees little of a low object from right next to it.
     pub min_standoff_m: f64,
-    /// Prefer waypoints with a clear line of sight to the object on the
-    /// occupancy grid (no occupied cell between the waypoint and the
-    /// object's bounds); others are used only when none has one. Default
-    /// true.
+    /// Prefer waypoints that are view points of the object (see
+    /// `max_reach_m` and `min_visible_share`); others are used only when
+    /// none is reachable. Default true.
     pub line_of_sight: bool,
     /// Spacing (m) of the candidate waypoints sampled around the object.
     /// Default 0.1.
     pub sample_step_m: f64,
     /// Candidate waypoints tested for a path, nearest first. Default 8.
     pub max_path_queries: usize,
+    /// A view point's largest distance (m) from the robot's body (the
+    /// vertical segment from its feet to its sensor) to the bounds of the
+    /// object's observed voxels. Default 0.85: ObjectNav's success radius
+    /// is 1 m, less a margin for the voxel size and an object's unobserved
+    /// parts.
+    pub max_reach_m: f64,
+    /// A view point's smallest share, in `[0, 1]`, of the object's observed
+    /// voxels in view: inside the level camera's vertical field of view
+    /// (less `vfov_margin_deg`) and reached by a straight line on the
+    /// occupancy grid that crosses no occupied cell but the object's own.
+    /// Default 0.25.
+    pub min_visible_share: f64,
+    /// Margin (degrees) kept inside the camera's vertical field of view.
+    /// Default 3.
+    pub vfov_margin_deg: f64,
+    /// Stop in view: when the target is confirmed but the robot's pose is
+    /// not a view point, the agent moves to one (a view-point-only
+    /// approach) at most this many times before it stops anyway. 0 turns
+    /// the check off. Default 2.
+    pub stop_in_view_attempts: u32,
+    /// Arrival radius (m) of a move to a view point (the smaller of this
+    /// and the `NAV_TO_OBJECT` rule's applies): the robot must end at the
+    /// view point, not merely near it. Default 0.2.
+    pub view_arrival_m: f64,
+}
+
+impl ApproachConfig {
+    /// The view-point rule of these parameters.
+    pub(crate) fn view_rule(&self) -> crate::view::ViewRule {
+        crate::view::ViewRule {
+            max_reach_m: self.max_reach_m,
+            min_visible_share: self.min_visible_share,
+            vfov_margin_rad: self.vfov_margin_deg.to_radians(),
+        }
+    }
 }
 
 impl Default for ApproachConfig {
@@ -122,6 +156,11 @@ impl Default for ApproachConfig {
             line_of_sight: true,
             sample_step_m: 0.1,
             max_path_queries: 8,
+            max_reach_m: 0.85,
+            min_visible_share: 0.25,
+            vfov_margin_deg: 3.0,
+            stop_in_view_attempts: 2,
+            view_arrival_m: 0.2,
         }
     }
 }
@@ -513,6 +552,18 @@ impl AgentConfig {
             return Err(component(
                 "approach",
                 "need standoff_m > 0, 0 <= min_standoff_m < standoff_m, sample_step_m > 0, at most 200 samples per axis, max_path_queries >= 1",
+            ));
+        }
+        if !(positive(a.max_reach_m)
+            && positive(a.view_arrival_m)
+            && (0.0..=1.0).contains(&a.min_visible_share)
+            && a.vfov_margin_deg.is_finite()
+            && (0.0..90.0).contains(&a.vfov_margin_deg)
+            && a.stop_in_view_attempts <= 16)
+        {
+            return Err(component(
+                "approach",
+                "need max_reach_m > 0, view_arrival_m > 0, min_visible_share in [0, 1], vfov_margin_deg in [0, 90), stop_in_view_attempts <= 16",
             ));
         }
         if !self.commitment.is_valid() {

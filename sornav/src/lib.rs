@@ -159,6 +159,7 @@ mod path_cost;
 mod snapshot;
 mod target;
 pub mod toml_file;
+mod view;
 
 pub use agent::{Agent, AgentCommand, BoxedPolicy};
 pub use commitment::CommitmentConfig;

@@ -6,6 +6,7 @@ use sornav_executor::RobotPose;
 use sornav_semantic_map::{DepthOptions, LabelId, LabeledPoint, PinholeCamera};
 
 use crate::error::ObservationError;
+use crate::view::Viewer;
 
 /// One labelled depth image with pinhole intrinsics.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -159,6 +160,26 @@ impl Observation {
             Sensor::Depth(d) => Point3::from(d.camera_pose.translation.vector),
             Sensor::Cloud(c) => c.origin,
             Sensor::Occupancy(o) => o.origin,
+        }
+    }
+
+    /// How the frame's sensor sees, for the stop-in-view check: its height
+    /// above the robot's feet and, for a depth camera, half its vertical
+    /// field of view (`atan(height / 2 / fy)`, the camera held level). A
+    /// labelled cloud has no vertical limit; an occupancy-only frame says
+    /// nothing (`None`).
+    pub(crate) fn viewer(&self) -> Option<Viewer> {
+        let eye_height = self.origin().z - self.pose.position.z;
+        match &self.sensor {
+            Sensor::Depth(d) => Some(Viewer {
+                eye_height,
+                half_vfov: Some((f64::from(d.camera.height) / 2.0 / d.camera.fy).atan()),
+            }),
+            Sensor::Cloud(_) => Some(Viewer {
+                eye_height,
+                half_vfov: None,
+            }),
+            Sensor::Occupancy(_) => None,
         }
     }
 

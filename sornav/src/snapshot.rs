@@ -19,6 +19,9 @@ use crate::target::Target;
 pub enum DecisionStep {
     /// The gate confirmed the target: STOP.
     TargetConfirmed,
+    /// The target is confirmed but the robot is not at a view point of
+    /// it: move to one before STOP (`approach.stop_in_view_attempts`).
+    StopInView,
     /// Arrived at a candidate: face it and observe again.
     TargetVerification,
     /// A candidate reached `N_obs`: `NAV_TO_OBJECT` (Algorithm 1, line 1).
@@ -226,6 +229,13 @@ pub struct AgentStats {
     pub unreachable_candidates: u64,
     /// Points left out of the maps (non-finite, out of range).
     pub rejected_points: u64,
+    /// Moves to a view point of a confirmed target before STOP.
+    #[serde(default)]
+    pub stop_in_view_moves: u64,
+    /// STOPs away from any view point of the target (no reachable view
+    /// point, or the allowed moves used up).
+    #[serde(default)]
+    pub stops_out_of_view: u64,
 }
 
 /// Everything needed to draw the agent's state (serde).

@@ -254,3 +254,43 @@ fn off_a_known_floor_with_nothing_reachable_the_search_ends() {
     let last = agent.last_decision().unwrap();
     assert!(last.reason.contains("no way back"), "{}", last.reason);
 }
+
+/// Stop in view: with a loose arrival rule (the robot counts as arrived
+/// 1.2 m short of the approach waypoint), the target is confirmed from
+/// beyond the 0.85 m reach of a view point; the agent then moves to a view
+/// point before STOP. With the check off it stops where it was confirmed.
+#[test]
+fn a_confirmed_target_is_reached_in_view_before_stop() {
+    let world = two_rooms();
+    let stop_reach = |attempts: u32| {
+        let mut config = AgentConfig::default();
+        config.executor.nav_to_object.arrival.radius_m = 1.2;
+        config.approach.stop_in_view_attempts = attempts;
+        let mut agent = Agent::new(config).unwrap();
+        agent.set_target("tv").unwrap();
+        let mut robot = Robot::new(3.5, 1.5);
+        let episode = run(&mut agent, &world, &mut robot, 400);
+        assert!(episode.stop.is_some(), "target confirmed");
+        let moves = agent
+            .decisions()
+            .iter()
+            .filter(|d| d.step == DecisionStep::StopInView)
+            .count();
+        let p = robot.pose.position;
+        // Body (feet to the 0.88 m sensor) to the TV's bounds (z 0.5-1.1).
+        let reach = common_distance(Point2::new(p.x, p.y));
+        (reach, moves, agent.snapshot().stats)
+    };
+    let (loose, moves, stats) = stop_reach(0);
+    assert_eq!(moves, 0);
+    assert_eq!(stats.stop_in_view_moves, 0);
+    assert!(
+        loose > 0.85,
+        "confirmed from {loose} m: the test needs a stop out of reach"
+    );
+    let (reach, moves, stats) = stop_reach(2);
+    assert!(moves >= 1, "no move to a view point");
+    assert_eq!(stats.stop_in_view_moves, moves as u64);
+    assert_eq!(stats.stops_out_of_view, 0);
+    assert!(reach <= 0.85, "stopped {reach} m from the TV");
+}

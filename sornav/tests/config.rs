@@ -117,6 +117,14 @@ fn unknown_fields_and_bad_values_are_errors() {
             "[horizon.solver.time_budget]\nsecs = 9223372036854775807\nnanos = 0\n",
         ),
         ("horizon", "[horizon.solver]\nkicks_per_pair = 1e300\n"),
+        // The stop-in-view rule.
+        ("approach", "[approach]\nmax_reach_m = 0.0\n"),
+        ("approach", "[approach]\nmax_reach_m = inf\n"),
+        ("approach", "[approach]\nmin_visible_share = 1.5\n"),
+        ("approach", "[approach]\nmin_visible_share = nan\n"),
+        ("approach", "[approach]\nvfov_margin_deg = 90.0\n"),
+        ("approach", "[approach]\nview_arrival_m = 0.0\n"),
+        ("approach", "[approach]\nstop_in_view_attempts = 17\n"),
     ] {
         match AgentConfig::from_toml(doc) {
             Err(ConfigError::Component { component: c, .. }) => assert_eq!(c, component, "{doc}"),
