@@ -1041,7 +1041,10 @@ impl Agent {
     ///    candidate starts verification, a failed approach rejects it) and
     ///    failed exploration / relocation targets are excluded.
     /// 2. Target gate first: a confirmed target gives
-    ///    [`AgentCommand::Stop`]; a candidate being verified gives
+    ///    [`AgentCommand::Stop`] once the robot is at a view point of it
+    ///    (stop in view: otherwise a `NAV_TO_OBJECT` to the nearest
+    ///    reachable view point, at most `approach.stop_in_view_attempts`
+    ///    times); a candidate being verified gives
     ///    [`AgentCommand::Verify`].
     /// 3. G_F is brought up to date for the pose, G_C is built from it
     ///    (`rho_c`, U_geo, top-K) and the exploration route is planned
