@@ -54,6 +54,22 @@ pub(crate) struct Viewer {
     pub half_vfov: Option<f64>,
 }
 
+impl Viewer {
+    /// The sensor's position for a robot with its feet at `feet`.
+    fn eye(&self, feet: &Point3<f64>) -> Point3<f64> {
+        Point3::new(feet.x, feet.y, feet.z + self.eye_height)
+    }
+
+    /// Whether `p` lies inside the vertical field of view of the level
+    /// camera at `eye`, less `margin_rad` (always, without a vertical
+    /// limit).
+    fn in_vertical_view(&self, eye: &Point3<f64>, p: &Point3<f64>, margin_rad: f64) -> bool {
+        let d = p - eye;
+        self.half_vfov
+            .is_none_or(|h| d.z.atan2(d.xy().norm()).abs() <= (h - margin_rad).max(0.0))
+    }
+}
+
 /// What makes a pose a view point of an object.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct ViewRule {
@@ -134,15 +150,12 @@ impl ObjectView {
         viewer: &Viewer,
         vfov_margin_rad: f64,
     ) -> f64 {
-        let eye = Point3::new(feet.x, feet.y, feet.z + viewer.eye_height);
-        let window = viewer.half_vfov.map(|h| (h - vfov_margin_rad).max(0.0));
+        let eye = viewer.eye(feet);
         let seen = self
             .points
             .iter()
             .filter(|p| {
-                let d = *p - eye;
-                window.is_none_or(|w| d.z.atan2(d.xy().norm()).abs() <= w)
-                    && self.line_clear(map, &eye, p)
+                viewer.in_vertical_view(&eye, p, vfov_margin_rad) && self.line_clear(map, &eye, p)
             })
             .count();
         seen as f64 / self.points.len() as f64
@@ -178,12 +191,8 @@ impl ObjectView {
         viewer: &Viewer,
         vfov_margin_rad: f64,
     ) -> bool {
-        let Some(half) = viewer.half_vfov else {
-            return true;
-        };
         let middle = Point3::from((self.lo.coords + self.hi.coords) / 2.0);
-        let d = middle - Point3::new(feet.x, feet.y, feet.z + viewer.eye_height);
-        d.z.atan2(d.xy().norm()).abs() <= (half - vfov_margin_rad).max(0.0)
+        viewer.in_vertical_view(&viewer.eye(feet), &middle, vfov_margin_rad)
     }
 
     /// Whether `feet` is a view point of the object under `rule`; the
