@@ -41,9 +41,7 @@ use std::path::Path;
 use plotters::coord::types::RangedCoordf64;
 use plotters::prelude::*;
 
-use sornav_platform_sim::Outcome;
-
-use crate::summary::{DISTANCE_BINS, FLOOR_BINS, VariantSummary, wilson};
+use crate::summary::{DISTANCE_BINS, FLOOR_BINS, OUTCOME_CLASSES, VariantSummary, wilson};
 
 const PALETTE: [RGBColor; 6] = [
     RGBColor(31, 119, 180),
@@ -301,14 +299,7 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
     if summaries.is_empty() {
         return Err(FigureError::Empty("failure chart"));
     }
-    const CLASSES: [(Outcome, &str); 5] = [
-        (Outcome::Success, "success"),
-        (Outcome::StepLimit, "step limit"),
-        (Outcome::Timeout, "timeout"),
-        (Outcome::FalseStop, "false stop"),
-        (Outcome::Other, "other"),
-    ];
-    let mut labels: Vec<&str> = CLASSES.iter().map(|c| c.1).collect();
+    let mut labels: Vec<&str> = OUTCOME_CLASSES.iter().map(|c| c.1).collect();
     labels.push("cross-floor episodes");
     let series: Vec<(String, Vec<Bar>)> = summaries
         .iter()
@@ -320,7 +311,7 @@ pub fn failure_composition(path: &Path, summaries: &[VariantSummary]) -> Result<
                     pct_ci(wilson(k, n, 1.96)),
                 )
             };
-            let mut bars: Vec<Bar> = CLASSES
+            let mut bars: Vec<Bar> = OUTCOME_CLASSES
                 .iter()
                 .map(|(o, _)| share(v.outcomes.get(o.name()).copied().unwrap_or(0)))
                 .collect();

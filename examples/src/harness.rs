@@ -32,7 +32,7 @@ use crate::output::{self, OutputError};
 use crate::record::EpisodeRecord;
 use crate::report::{self, ReportError};
 use crate::scenes::{SceneSource, SceneSpecError};
-use crate::topdown::TopDownMap;
+use crate::topdown::{self, TopDownMap};
 
 /// Errors of an evaluation.
 #[derive(Debug, thiserror::Error)]
@@ -190,6 +190,21 @@ pub struct EvalConfig {
     /// Top-down maps: the first this many episodes of every variant, plus
     /// up to this many episodes in which the agent relocated.
     pub maps: usize,
+    /// Failure analysis: when positive, the map of every failed episode of
+    /// an agent variant is saved in `maps/failures/`, and the report shows
+    /// up to this many of them per variant and failure class (see
+    /// [`crate::failure_analysis`]); 0 saves none. Absent from older `run.json` files: the
+    /// default, [`DEFAULT_FAILURE_MAPS`].
+    #[serde(default = "default_failure_maps")]
+    pub failure_maps: usize,
+}
+
+/// Examples per failure class in the report's failure analysis, by default
+/// ([`EvalConfig::failure_maps`]).
+pub const DEFAULT_FAILURE_MAPS: usize = 3;
+
+fn default_failure_maps() -> usize {
+    DEFAULT_FAILURE_MAPS
 }
 
 /// Most parallel jobs a run accepts ([`RunOptions::jobs`]): each job is a
@@ -402,21 +417,29 @@ fn scene_episodes(
                         None => by_cat.push(vec![e]),
                     }
                 }
-                let mut round = 0;
-                while all.len() < *cap && by_cat.iter().any(|v| v.len() > round) {
-                    for v in &by_cat {
-                        if all.len() < *cap
-                            && let Some(e) = v.get(round)
-                        {
-                            all.push(e.clone());
-                        }
-                    }
-                    round += 1;
-                }
+                all = round_robin(&by_cat, *cap);
             }
             Ok(all)
         }
     }
+}
+
+/// Up to `cap` items taken from `groups` in rounds: the first of every
+/// group (in order), then the second of every group, and so on.
+pub(crate) fn round_robin<T: Clone>(groups: &[Vec<T>], cap: usize) -> Vec<T> {
+    let mut out = Vec::new();
+    let mut round = 0;
+    while out.len() < cap && groups.iter().any(|g| g.len() > round) {
+        for g in groups {
+            if out.len() < cap
+                && let Some(x) = g.get(round)
+            {
+                out.push(x.clone());
+            }
+        }
+        round += 1;
+    }
+    out
 }
 
 /// Whether a line of `episodes.jsonl` is a complete record of the format
@@ -694,19 +717,6 @@ fn topdown(
     }
 }
 
-/// File-name-safe text.
-fn safe(s: &str) -> String {
-    s.chars()
-        .map(|c| {
-            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
-                c
-            } else {
-                '_'
-            }
-        })
-        .collect()
-}
-
 /// Loads every scene of `config` (in parallel on `pool`) with its episodes
 /// (from the episode file or generated), and checks them: episode ids unique
 /// per scene, at least one episode, a warning for a target category without
@@ -877,6 +887,10 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
 
     let maps_dir = options.out.join("maps");
     std::fs::create_dir_all(&maps_dir).map_err(|e| io_err(&maps_dir, e))?;
+    let failure_maps_dir = maps_dir.join(topdown::FAILURES_DIR);
+    if config.failure_maps > 0 {
+        std::fs::create_dir_all(&failure_maps_dir).map_err(|e| io_err(&failure_maps_dir, e))?;
+    }
     repair_tail(&jsonl)?;
     let out_file = OpenOptions::new()
         .create(true)
@@ -952,16 +966,24 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             let relocated = trace.as_ref().is_some_and(|t| !t.relocations.is_empty())
                 && relocation_maps.fetch_add(1, Ordering::Relaxed) < config.maps;
             let want_map = map_episodes.contains(&(w.scene, w.episode)) || relocated;
+            // Failure analysis: every failed episode of an agent variant
+            // gets a map, and the report picks its examples from them, so
+            // the choice does not depend on the order episodes finish in.
+            let want_failure_map = config.failure_maps > 0 && policy.is_some() && !result.success;
             // The agent's end state and the full trace only for a map.
             let snapshot = policy
                 .as_ref()
                 .and_then(SornavPolicy::agent)
-                .filter(|_| want_map)
+                .filter(|_| want_map || want_failure_map)
                 .map(sornav::Agent::snapshot);
             drop(policy);
-            let map_trace = if want_map { trace.clone() } else { None };
+            let map_trace = if want_map || want_failure_map {
+                trace.clone()
+            } else {
+                None
+            };
             let record = EpisodeRecord::new(variant, result, trace);
-            if want_map {
+            if want_map || want_failure_map {
                 let map = topdown(
                     &scene.sim,
                     episode,
@@ -969,14 +991,19 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
                     &map_trace.unwrap_or_default(),
                     snapshot,
                 );
-                let path = maps_dir.join(format!(
-                    "{}__{}__{}.png",
-                    safe(variant),
-                    safe(&scene.name),
-                    safe(&episode.episode_id)
-                ));
-                if let Err(e) = output::replace_with(&path, |tmp| map.save_png(tmp, 720)) {
-                    tracing::warn!("map {}: {e}", path.display());
+                let name = topdown::file_name(variant, &scene.name, &episode.episode_id);
+                let targets = [
+                    (want_map, maps_dir.join(&name), topdown::MAP_SIZE),
+                    (
+                        want_failure_map,
+                        failure_maps_dir.join(&name),
+                        topdown::FAILURE_MAP_SIZE,
+                    ),
+                ];
+                for (_, path, size) in targets.iter().filter(|t| t.0) {
+                    if let Err(e) = output::replace_with(path, |tmp| map.save_png(tmp, *size)) {
+                        tracing::warn!("map {}: {e}", path.display());
+                    }
                 }
             }
             let line = serde_json::to_string(&record);
@@ -1125,17 +1152,28 @@ pub fn merge(out: &Path, shards: &[PathBuf]) -> Result<PathBuf, HarnessError> {
     }
     std::fs::rename(&tmp, &jsonl).map_err(|e| io_err(&jsonl, e))?;
     let maps = out.join("maps");
-    std::fs::create_dir_all(&maps).map_err(|e| io_err(&maps, e))?;
     for dir in shards {
-        let Ok(entries) = std::fs::read_dir(dir.join("maps")) else {
-            continue;
-        };
-        for e in entries.flatten() {
-            let target = maps.join(e.file_name());
-            if e.path() != target && !target.exists() {
-                std::fs::copy(e.path(), &target).map_err(|err| io_err(&target, err))?;
-            }
-        }
+        copy_new_files(&dir.join("maps"), &maps)?;
+        copy_new_files(
+            &dir.join("maps").join(topdown::FAILURES_DIR),
+            &maps.join(topdown::FAILURES_DIR),
+        )?;
     }
     Ok(report::write(out, &config, &records, None)?)
+}
+
+/// Copies the files (not the directories) of `from` that `to` lacks into
+/// `to` (created); a missing `from` copies nothing.
+fn copy_new_files(from: &Path, to: &Path) -> Result<(), HarnessError> {
+    std::fs::create_dir_all(to).map_err(|e| io_err(to, e))?;
+    let Ok(entries) = std::fs::read_dir(from) else {
+        return Ok(());
+    };
+    for e in entries.flatten() {
+        let target = to.join(e.file_name());
+        if e.file_type().is_ok_and(|t| t.is_file()) && e.path() != target && !target.exists() {
+            std::fs::copy(e.path(), &target).map_err(|err| io_err(&target, err))?;
+        }
+    }
+    Ok(())
 }

@@ -10,6 +10,8 @@
 //! * [`record`], [`summary`], [`report`], [`figures`], [`topdown`]: the
 //!   outputs (`episodes.jsonl`, `summary.json`, `report.md`, PNG figures
 //!   and top-down maps).
+//! * [`failure_analysis`]: the report's failure analysis (example maps per
+//!   failure class).
 //! * [`output`]: the output directory's lock and atomic file writes.
 //! * [`compare`]: the paired comparison of two runs (`sornav-sim compare`).
 //! * [`ros`]: the start-up shared by the ROS 2 binaries `sornav-robot` and
@@ -24,6 +26,7 @@
 pub mod adapter;
 pub mod compare;
 pub mod decision_log;
+pub mod failure_analysis;
 pub mod figures;
 pub mod harness;
 pub mod histogram;

@@ -404,6 +404,8 @@ fn markdown(
         }
     }
 
+    s.push_str(&crate::failure_analysis::section(config, records, dir));
+
     // Maps.
     if let Ok(entries) = std::fs::read_dir(dir.join("maps")) {
         let mut maps: Vec<String> = entries

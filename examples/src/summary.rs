@@ -14,10 +14,20 @@ use std::collections::BTreeMap;
 
 use serde::{Deserialize, Serialize};
 use sornav::supervisor::LlmStats;
-use sornav_platform_sim::{EpisodeResult, Summary};
+use sornav_platform_sim::{EpisodeResult, Outcome, Summary};
 
 use crate::histogram::Histogram;
 use crate::record::EpisodeRecord;
+
+/// The outcome classes in report order with their labels: success, then
+/// the failure causes (exclusive, in the order the simulator tests them).
+pub const OUTCOME_CLASSES: [(Outcome, &str); 5] = [
+    (Outcome::Success, "success"),
+    (Outcome::StepLimit, "step limit"),
+    (Outcome::Timeout, "timeout"),
+    (Outcome::FalseStop, "false stop"),
+    (Outcome::Other, "other"),
+];
 
 /// The initial-distance bins of the success-vs-distance analysis (m).
 pub const DISTANCE_BINS: [(f64, f64, &str); 4] = [

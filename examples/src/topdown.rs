@@ -10,6 +10,42 @@ use sornav::OccupancyRaster;
 
 use crate::figures::{FigureError, legend, register_font};
 
+/// Side of the maps in `maps/` (pixels).
+pub const MAP_SIZE: u32 = 720;
+
+/// Side of the failure maps in `maps/failures/` (pixels): smaller, since
+/// every failed episode gets one.
+pub const FAILURE_MAP_SIZE: u32 = 480;
+
+/// The sub-directory of `maps/` that holds the map of every failed episode
+/// (when the evaluation's `failure_maps` is positive).
+pub const FAILURES_DIR: &str = "failures";
+
+/// The file name of the map of `variant` on one episode:
+/// `variant__scene__episode.png`, with every character other than ASCII
+/// letters, digits, `-` and `_` replaced by `_`.
+pub fn file_name(variant: &str, scene: &str, episode_id: &str) -> String {
+    format!(
+        "{}__{}__{}.png",
+        safe(variant),
+        safe(scene),
+        safe(episode_id)
+    )
+}
+
+/// File-name-safe text.
+fn safe(s: &str) -> String {
+    s.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
 /// Everything drawn on one top-down map (world x/y, metres).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct TopDownMap {

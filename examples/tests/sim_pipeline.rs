@@ -357,3 +357,95 @@ fn cli_arguments() {
         assert!(!out.stderr.is_empty());
     }
 }
+
+/// The "Failure analysis" section of a report (up to the next section).
+fn failure_section(dir: &Path) -> String {
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    let start = report
+        .find("## Failure analysis")
+        .expect("report.md has a Failure analysis section");
+    let rest = &report[start..];
+    let end = rest[2..].find("\n## ").map_or(rest.len(), |e| e + 2);
+    rest[..end].to_owned()
+}
+
+/// With a budget too small to succeed, every episode fails: the report's
+/// failure analysis shows at most three maps per class, every map it links
+/// exists, and the examples are the same whatever the number of jobs and
+/// after shards are merged.
+#[test]
+fn failure_analysis_is_deterministic_across_jobs_and_merge() {
+    let config = EvalConfig {
+        seed: 3,
+        failure_maps: 3,
+        ..common::small_eval(
+            &[40, 41, 42],
+            2,
+            &["bed", "chair", "toilet"],
+            &["sornav"],
+            20,
+            None,
+        )
+    };
+    let one = temp_dir("fail-jobs1");
+    let two = temp_dir("fail-jobs2");
+    harness::run(&config, &common::options(&one, 1, None, false)).unwrap();
+    harness::run(&config, &common::options(&two, 2, None, false)).unwrap();
+    let (s0, s1, merged) = (
+        temp_dir("fail-s0"),
+        temp_dir("fail-s1"),
+        temp_dir("fail-merged"),
+    );
+    harness::run(&config, &common::options(&s0, 2, Some((0, 2)), false)).unwrap();
+    harness::run(&config, &common::options(&s1, 2, Some((1, 2)), false)).unwrap();
+    harness::merge(&merged, &[s0.clone(), s1.clone()]).unwrap();
+
+    let records = harness::read_records(&one.join("episodes.jsonl")).unwrap();
+    let failures = records.iter().filter(|r| !r.result.success).count();
+    assert!(failures > 3, "{failures} failures: the budget forces them");
+    assert_eq!(
+        std::fs::read_dir(one.join("maps/failures"))
+            .unwrap()
+            .count(),
+        failures,
+        "one map per failed episode"
+    );
+    let section = failure_section(&one);
+    // A resumed run (nothing left to run) writes the same section.
+    harness::run(&config, &common::options(&one, 2, None, false)).unwrap();
+    for dir in [&one, &two, &merged] {
+        let s = failure_section(dir);
+        assert_eq!(s, section, "{}", dir.display());
+        for class in s.split("\n#### ").skip(1) {
+            let links: Vec<&str> = class
+                .split("](")
+                .skip(1)
+                .map(|l| &l[..l.find(')').unwrap()])
+                .collect();
+            assert!(!links.is_empty() && links.len() <= 3, "{class}");
+            for l in links {
+                assert!(l.starts_with("maps/failures/"), "{l}");
+                assert!(dir.join(l).is_file(), "{l} missing in {}", dir.display());
+            }
+        }
+    }
+    // Six failures in three scenes of one class (at most two classes):
+    // some class shows three examples, the first of each scene.
+    assert!(
+        section.matches("![maps/failures/").count() >= 3,
+        "{section}"
+    );
+    // Off: no failure maps, no section.
+    let off = temp_dir("fail-off");
+    let config_off = EvalConfig {
+        failure_maps: 0,
+        ..config
+    };
+    harness::run(&config_off, &common::options(&off, 2, None, false)).unwrap();
+    assert!(!off.join("maps/failures").exists());
+    let report = std::fs::read_to_string(off.join("report.md")).unwrap();
+    assert!(!report.contains("## Failure analysis"));
+    for d in [one, two, s0, s1, merged, off] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

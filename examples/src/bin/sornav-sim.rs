@@ -164,6 +164,11 @@ struct RunArgs {
     /// episodes with relocations.
     #[arg(long, value_name = "N", default_value_t = 4)]
     maps: usize,
+    /// Failure analysis: save the map of every failed episode in
+    /// `maps/failures/` and show up to N per variant and failure class in
+    /// the report (0: none).
+    #[arg(long, value_name = "N", default_value_t = harness::DEFAULT_FAILURE_MAPS)]
+    failure_maps: usize,
     /// Action budget per episode.
     #[arg(long, default_value_t = 500)]
     max_actions: usize,
@@ -355,6 +360,7 @@ fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
         agent,
         llm,
         maps: a.maps,
+        failure_maps: a.failure_maps,
     })
 }
 

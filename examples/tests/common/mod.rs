@@ -10,8 +10,8 @@ use sornav_platform_sim::{CameraConfig, RunConfig};
 /// A small evaluation of `variants` (simulator agent configuration, 96 x 72
 /// camera) on the procedural houses `scene_seeds`: one episode per target
 /// category of `categories`, at most `per_scene` per house, `max_actions`
-/// actions each. Evaluation seed 0 and no maps: callers set `seed` and
-/// `maps` by struct update.
+/// actions each. Evaluation seed 0 and no maps: callers set `seed`,
+/// `maps` and `failure_maps` by struct update.
 pub fn small_eval(
     scene_seeds: &[u64],
     per_scene: usize,
@@ -49,6 +49,7 @@ pub fn small_eval(
         agent: sim_agent_config(),
         llm,
         maps: 0,
+        failure_maps: 0,
     }
 }
 
