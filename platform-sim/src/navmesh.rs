@@ -321,7 +321,17 @@ impl NavMesh {
         solids.sort_unstable_by(|a, b| a.col.cmp(&b.col).then(a.zmin.total_cmp(&b.zmin)));
         let step = config.max_step as f32;
         let mut merged: Vec<Solid> = Vec::with_capacity(solids.len() / 2);
-        for s in solids {
+        for mut s in solids {
+            // A surface lying within THIN_COVER above the one below it
+            // rests on it: the top of a carpet (its top and bottom faces
+            // are separate solids in a cell inside its outline) keeps the
+            // ground height of the floor under it.
+            if let Some(cur) = merged.last()
+                && cur.col == s.col
+                && s.zmin <= cur.zmax + THIN_COVER
+            {
+                s.ground_z = s.ground_z.max(cur.ground_z);
+            }
             if let Some(cur) = merged.last_mut()
                 && cur.col == s.col
                 && s.zmin <= cur.zmax + 1e-3

@@ -52,6 +52,43 @@ fn furniture_tops_are_not_floor_islands() {
     assert!((nav.walkable_area() - nav.floor_area()).abs() < 1e-9);
 }
 
+/// A carpet (an object a few millimetres thick lying on the floor) is
+/// floor: inside its outline its top and bottom faces are separate
+/// surfaces in the height field, and the top must keep the floor's ground
+/// height (Habitat counts a rug as floor; a television seen from the rug
+/// in front of it is seen from a view point). A low platform 0.1 m high is
+/// not.
+#[test]
+fn carpets_are_floor_and_platforms_are_not() {
+    for (thickness, floor) in [(0.002, true), (0.005, true), (0.03, true), (0.1, false)] {
+        let mut b = MeshBuilder::new();
+        let f = b.add_instance(InstanceKind::Floor, "floor", "floor", 0);
+        b.aabb_box(Point3::new(0.0, 0.0, -0.1), Point3::new(6.0, 5.0, 0.0), f);
+        let rug = b.add_instance(InstanceKind::Object, "rug", "carpet", 0);
+        b.aabb_box(
+            Point3::new(1.5, 1.0, 0.0),
+            Point3::new(4.5, 4.0, thickness),
+            rug,
+        );
+        let bed = b.add_instance(InstanceKind::Object, "bed", "bed", 0);
+        b.aabb_box(Point3::new(5.0, 4.0, 0.0), Point3::new(5.8, 4.8, 0.5), bed);
+        let scene = common::one_level_scene(b, "bed");
+        let nav = NavMesh::build(&scene, &NavMeshConfig::default()).unwrap();
+        let on_rug = nav
+            .span_at(&Point3::new(3.0, 2.5, thickness))
+            .expect("the carpet is walkable");
+        assert!(
+            (f64::from(nav.spans()[on_rug as usize].floor) - thickness).abs() < 1e-3,
+            "the span is the carpet's top"
+        );
+        assert_eq!(
+            nav.is_floor_span(on_rug),
+            floor,
+            "a {thickness} m cover is floor: {floor}"
+        );
+    }
+}
+
 /// The object instance (not structure) that `p` stands on or in: `p` lies
 /// inside the object's footprint, at least 0.1 m above its bottom (a carpet
 /// does not count) and at most at its top (2 cm tolerance; a floor slab
