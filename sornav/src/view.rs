@@ -20,7 +20,15 @@
 //!   and that a straight 3-D line from the camera reaches through the
 //!   semantic map without meeting an observed voxel on the way — the
 //!   object's own included, so that a surface seen edge-on (a television
-//!   from the side) hides itself, as it does from the camera.
+//!   from the side) hides itself, as it does from the camera;
+//! - **box samples**: at least one of 27 points spread over the object's
+//!   bounds (at 1/6, 1/2 and 5/6 of each extent, the points Habitat's
+//!   dataset procedure and the simulator test) is in the vertical field of
+//!   view and the line from the camera to it meets the object's own voxels
+//!   first. Seeing some of an object's surface is not enough: a chair seen
+//!   past the edge of a table, or a television seen over its base plate,
+//!   shows voxels while every line to the middle of its bounds ends on
+//!   something else or in open air.
 //!
 //! Occlusion is judged in 3-D on the semantic map's observed voxels, not on
 //! the 2-D occupancy grid: the cabinet under a television or a low table in
@@ -28,7 +36,9 @@
 //! it. A surface the robot never observed does not occlude: the check can
 //! only be as right as the map.
 
-use nalgebra::{Point2, Point3};
+use std::collections::HashSet;
+
+use nalgebra::{Point2, Point3, Vector3};
 use sornav_semantic_map::{SemanticMap, VoxelKey};
 
 /// Most object points the visible share looks at: an even subsample
@@ -42,6 +52,16 @@ pub(crate) const FLOOR_TOLERANCE_M: f64 = 0.05;
 
 /// Voxel sizes before an object point that a line of sight does not test.
 pub(crate) const TAIL_VOXELS: f64 = 2.0;
+
+/// Box samples a view point must see. The map's voxels make surfaces up
+/// to a voxel thicker than they are, so a line that grazes an edge meets
+/// the object on the map but not in the world; a second sample is the
+/// margin against such poses (Habitat's rule asks for one, exactly).
+pub(crate) const MIN_BOX_SAMPLES: usize = 2;
+
+/// Fractions of each extent of the object's bounds at which the box
+/// samples lie (27 points).
+const BOX_SAMPLE_FRACTIONS: [f64; 3] = [1.0 / 6.0, 0.5, 5.0 / 6.0];
 
 /// How the agent's sensor sees, learned from the frames it gets.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -86,6 +106,8 @@ pub(crate) struct ViewRule {
 pub(crate) struct ObjectView {
     /// Subsample of the voxel centres (at most [`MAX_VIEW_POINTS`]).
     points: Vec<Point3<f64>>,
+    /// All of the object's voxels.
+    keys: HashSet<VoxelKey>,
     /// Bounds of all voxel centres.
     lo: Point3<f64>,
     hi: Point3<f64>,
@@ -118,6 +140,7 @@ impl ObjectView {
         let points = keys.iter().step_by(stride).map(|k| k.centre(res)).collect();
         Some(Self {
             points,
+            keys: keys.iter().copied().collect(),
             lo,
             hi,
             res,
@@ -195,6 +218,70 @@ impl ObjectView {
         viewer.in_vertical_view(&viewer.eye(feet), &middle, vfov_margin_rad)
     }
 
+    /// The 27 box samples: points at [`BOX_SAMPLE_FRACTIONS`] of each
+    /// extent of the bounds of the object's voxels (voxel faces, not
+    /// centres).
+    fn box_samples(&self) -> impl Iterator<Item = Point3<f64>> + '_ {
+        let half = Vector3::repeat(self.res / 2.0);
+        let (lo, hi) = (self.lo - half, self.hi + half);
+        let e = hi - lo;
+        BOX_SAMPLE_FRACTIONS.into_iter().flat_map(move |fx| {
+            BOX_SAMPLE_FRACTIONS.into_iter().flat_map(move |fy| {
+                BOX_SAMPLE_FRACTIONS
+                    .into_iter()
+                    .map(move |fz| lo + Vector3::new(e.x * fx, e.y * fy, e.z * fz))
+            })
+        })
+    }
+
+    /// Whether the line from `eye` to `p` (sampled every third of a voxel,
+    /// up to half a voxel past `p`) meets one of the object's voxels before
+    /// any other observed voxel: the object is what the camera sees in that
+    /// direction. A line that ends in open air or on another surface first
+    /// does not show the object.
+    fn first_hit_is_object(&self, map: &SemanticMap, eye: &Point3<f64>, p: &Point3<f64>) -> bool {
+        let length = (p - eye).norm();
+        let end = length + self.res / 2.0;
+        if !end.is_finite() || length <= 0.0 {
+            return false;
+        }
+        let n = (end / (self.res / 3.0)).ceil() as usize;
+        let dir = (p - eye) / length;
+        for i in 0..=n {
+            let q = eye + dir * (end * i as f64 / n.max(1) as f64);
+            let key = VoxelKey::from_point(&q, self.res);
+            if self.keys.contains(&key) {
+                return true;
+            }
+            if map.voxel(&key).is_some() {
+                return false;
+            }
+        }
+        false
+    }
+
+    /// How many box samples (see the module docs) are seen from the sensor
+    /// at `feet`: inside the vertical field of view (less
+    /// `vfov_margin_rad`), with the object first on the line to them.
+    ///
+    /// # Complexity
+    /// O(27 L) for L voxels per line.
+    pub(crate) fn box_samples_seen(
+        &self,
+        map: &SemanticMap,
+        feet: &Point3<f64>,
+        viewer: &Viewer,
+        vfov_margin_rad: f64,
+    ) -> usize {
+        let eye = viewer.eye(feet);
+        self.box_samples()
+            .filter(|p| {
+                viewer.in_vertical_view(&eye, p, vfov_margin_rad)
+                    && self.first_hit_is_object(map, &eye, p)
+            })
+            .count()
+    }
+
     /// Whether `feet` is a view point of the object under `rule`; the
     /// visible share is computed only when the reach allows.
     pub(crate) fn seen_from(
@@ -207,6 +294,7 @@ impl ObjectView {
         self.reach(feet, viewer.eye_height) <= rule.max_reach_m
             && self.middle_in_view(feet, viewer, rule.vfov_margin_rad)
             && self.visible_share(map, feet, viewer, rule.vfov_margin_rad) >= rule.min_visible_share
+            && self.box_samples_seen(map, feet, viewer, rule.vfov_margin_rad) >= MIN_BOX_SAMPLES
     }
 }
 
