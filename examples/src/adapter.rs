@@ -270,6 +270,10 @@ pub struct EpisodeTrace {
     pub missions: usize,
     /// The LLM policy's counters, when the agent asks a model.
     pub llm: Option<sornav::supervisor::LlmStats>,
+    /// Frontiers the agent excluded after its exploration missions had
+    /// reached their place three times (bounded re-dispatches).
+    #[serde(default)]
+    pub revisit_exclusions: usize,
 }
 
 /// SOR-Nav on platform-sim: a [`Policy`] around the [`Agent`].
@@ -364,6 +368,10 @@ impl<F: AgentFactory> SornavPolicy<F> {
     pub fn take_trace(&mut self) -> EpisodeTrace {
         let mut trace = std::mem::take(&mut self.trace);
         trace.llm = self.agent.as_ref().and_then(Agent::llm_stats);
+        trace.revisit_exclusions = self
+            .agent
+            .as_ref()
+            .map_or(0, |a| a.stats().revisit_exclusions as usize);
         trace
     }
 

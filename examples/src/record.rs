@@ -44,6 +44,10 @@ pub struct EpisodeRecord {
     pub missions: usize,
     /// Missions the motion layer reported stuck or without a path.
     pub blocked_missions: usize,
+    /// Frontiers excluded after exploration missions had reached their
+    /// place three times (thrashing bounded; see `sornav`'s agent).
+    #[serde(default)]
+    pub revisit_exclusions: usize,
     /// Agent errors (first few messages).
     pub errors: Vec<String>,
     /// The decision log (runs of identical decisions merged).
@@ -82,6 +86,7 @@ impl EpisodeRecord {
             verifications: trace.verifications.len(),
             missions: trace.missions,
             blocked_missions: trace.blocked_missions,
+            revisit_exclusions: trace.revisit_exclusions,
             errors: trace.errors,
             decisions: trace.decisions,
             llm: trace.llm,

@@ -151,6 +151,11 @@ pub struct VariantSummary {
     /// new waypoint counts): how often the agent changed its mind.
     #[serde(default)]
     pub mean_missions: f64,
+    /// Mean frontiers per episode given up after exploration missions had
+    /// reached their place three times (re-dispatches of the same goal
+    /// under new frontier ids, cut off).
+    #[serde(default)]
+    pub mean_revisit_exclusions: f64,
     /// Fraction of episodes with at least one relocation.
     pub relocation_rate: f64,
     /// Mean relocations per episode.
@@ -380,6 +385,7 @@ impl VariantSummary {
                 }
             },
             mean_missions: mean(records.iter().map(|r| r.missions as f64)),
+            mean_revisit_exclusions: mean(records.iter().map(|r| r.revisit_exclusions as f64)),
             relocation_rate: rate(count(&|r| !r.relocations.is_empty())),
             mean_relocations: mean(records.iter().map(|r| r.relocations.len() as f64)),
             exhausted_rate: rate(count(&|r| r.agent_end == "exhausted")),

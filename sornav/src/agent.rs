@@ -152,6 +152,20 @@ const TRAIL_MAX: usize = 10_000;
 /// to a stair end to count as standing at it.
 const STAIR_END_REACH: f64 = 0.4;
 
+/// Arrivals of exploration missions at one place (within
+/// [`REVISIT_RADIUS_M`]) after which the frontiers whose viewpoints lie
+/// there are excluded. A frontier that standing at its viewpoint does not
+/// observe away changes a little with every frame and comes back under a
+/// new id, so the per-id arrival count never reaches its limit and the
+/// robot is sent to the same spot again and again (a thrash); counting by
+/// place bounds the re-dispatches of the same goal.
+const REVISIT_LIMIT: u32 = 3;
+
+/// Radius (m) of a place for [`REVISIT_LIMIT`], horizontally and
+/// vertically: an arrival radius and the drift of a re-extracted
+/// frontier's viewpoint.
+const REVISIT_RADIUS_M: f64 = 0.4;
+
 /// How long the robot stands at a reached frontier before it is excluded
 /// (two control steps at 2 Hz: time to look at it).
 const LOOK_TIME: Duration = Duration::from_secs(1);
@@ -193,6 +207,9 @@ pub struct Agent {
     excluded: BTreeSet<FrontierId>,
     /// Arrivals at each frontier and the time of the first.
     arrivals: BTreeMap<FrontierId, (u32, Duration)>,
+    /// Places where exploration missions arrived, with their counts (see
+    /// [`REVISIT_LIMIT`]).
+    visits: Vec<(Point3<f64>, u32)>,
     /// The last pose at which a frontier was reachable.
     last_placed: Option<Point3<f64>>,
     /// The excluded stair ends were retried once (see `retry_stairs`).
@@ -492,6 +509,7 @@ impl Agent {
             clusters: None,
             excluded: BTreeSet::new(),
             arrivals: BTreeMap::new(),
+            visits: Vec::new(),
             last_placed: None,
             stairs_retried: false,
             viewer: None,
@@ -849,6 +867,12 @@ impl Agent {
                 // grown map often succeeds) before the end is excluded.
                 let id = FrontierId(frontier.0);
                 let stair = self.frontiers.is_stair_frontier(id);
+                if reached
+                    && !stair
+                    && let Some(pose) = self.pose
+                {
+                    self.record_visit(pose.position);
+                }
                 if failed && !stair {
                     self.exclude(id);
                 } else if failed || (reached && !self.short_of_stair_end(id)) {
@@ -874,6 +898,53 @@ impl Agent {
             }
         }
         self.last_outcome = Some(outcome);
+    }
+
+    /// Counts an exploration arrival at `at` (see [`REVISIT_LIMIT`]).
+    fn record_visit(&mut self, at: Point3<f64>) {
+        let near = |p: &Point3<f64>| {
+            (p.xy() - at.xy()).norm() <= REVISIT_RADIUS_M && (p.z - at.z).abs() <= REVISIT_RADIUS_M
+        };
+        match self.visits.iter_mut().find(|(p, _)| near(p)) {
+            Some((_, n)) => *n += 1,
+            None => self.visits.push((at, 1)),
+        }
+    }
+
+    /// Excludes the frontiers (not stair ends) of G_F whose viewpoints lie
+    /// at a place exploration missions reached [`REVISIT_LIMIT`] times.
+    ///
+    /// # Complexity
+    /// O(n v) for n frontiers and v visited places.
+    fn exclude_revisited(&mut self) {
+        let spent: Vec<Point3<f64>> = self
+            .visits
+            .iter()
+            .filter(|(_, n)| *n >= REVISIT_LIMIT)
+            .map(|(p, _)| *p)
+            .collect();
+        if spent.is_empty() {
+            return;
+        }
+        let ids: Vec<FrontierId> = self
+            .frontiers
+            .graph()
+            .nodes()
+            .filter(|f| !self.excluded.contains(&f.id))
+            .filter(|f| {
+                let v = f.viewpoint3();
+                spent.iter().any(|p| {
+                    (p.xy() - v.xy()).norm() <= REVISIT_RADIUS_M
+                        && (p.z - v.z).abs() <= REVISIT_RADIUS_M
+                })
+            })
+            .map(|f| f.id)
+            .filter(|&id| !self.frontiers.is_stair_frontier(id))
+            .collect();
+        for id in ids {
+            self.exclude(id);
+            self.stats.revisit_exclusions += 1;
+        }
     }
 
     /// Once per target: when the floor is exhausted while stair ends of
@@ -1189,6 +1260,7 @@ impl Agent {
             .map(|t| t.target.category.clone())
             .unwrap_or_default();
         self.frontiers.frontier_graph(&pose.position)?;
+        self.exclude_revisited();
         // Read after the refresh, which may have found new levels.
         let levels: BTreeMap<LevelId, f64> =
             self.frontiers.levels().map(|l| (l.id, l.floor_z)).collect();

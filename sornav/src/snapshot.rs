@@ -236,6 +236,11 @@ pub struct AgentStats {
     /// point, or the allowed moves used up).
     #[serde(default)]
     pub stops_out_of_view: u64,
+    /// Frontiers excluded because exploration missions had reached their
+    /// viewpoint's place three times (re-dispatches of the same goal under
+    /// new frontier ids: thrashing bounded).
+    #[serde(default)]
+    pub revisit_exclusions: u64,
 }
 
 /// Everything needed to draw the agent's state (serde).
