@@ -2,6 +2,7 @@
 //! reaches the simulator's camera and is recorded in `run.json`; a bad
 //! preset name is a clear error; a noiseless run's `run.json` is unchanged.
 
+#[allow(dead_code)] // the run-option helpers are for the other test binaries
 mod common;
 
 use sornav_examples::harness::{EvalConfig, HarnessError};
