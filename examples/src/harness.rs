@@ -25,7 +25,9 @@ use sornav::supervisor::llm::transport::{
 };
 use sornav::{AgentConfig, AgentError, BoxedPolicy, PolicyConfig, Variant};
 use sornav_platform_sim::episodes::{GeneratorConfig, HabitatDataset, generate_episodes};
-use sornav_platform_sim::{CameraConfig, Episode, Oracle, RunConfig, Simulator, run_episode};
+use sornav_platform_sim::{
+    CameraConfig, Episode, NoisePreset, Oracle, RunConfig, Simulator, run_episode,
+};
 
 use crate::adapter::{AdapterConfig, ConfigFactory, EpisodeTrace, SornavPolicy};
 use crate::output::{self, OutputError};
@@ -151,7 +153,8 @@ pub enum EpisodeSource {
     },
 }
 
-/// The LLM policy of the `sornav` variant.
+/// The LLM policy of the `sornav` variant (and of `no-target-gate`, its
+/// ablation, so that the two differ only in the target gate).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct LlmSettings {
     /// Client configuration (base URL, model, timeout, ...).
@@ -177,15 +180,22 @@ pub struct EvalConfig {
     pub variants: Vec<String>,
     /// Seed of scene generation, episode generation and sensor noise.
     pub seed: u64,
-    /// Camera (resolution, field of view, depth range).
+    /// Camera (resolution, field of view, depth range, sensor noise rates
+    /// in `camera.noise`).
     pub camera: CameraConfig,
+    /// Name of the sensor-noise preset whose rates `camera.noise` holds
+    /// (`sornav-sim --noise`; see [`NoisePreset`]), or [`CUSTOM_NOISE`]
+    /// for rates read from a file (`--noise-config`). Absent (and not
+    /// written to `run.json`) for a noiseless run.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_preset: Option<String>,
     /// Episode rules (500 actions, 120 s).
     pub run: RunConfig,
     /// Agent command -> action adapter.
     pub adapter: AdapterConfig,
     /// Base agent configuration (variants change policy and ordering).
     pub agent: AgentConfig,
-    /// LLM policy for the `sornav` variant, when set.
+    /// LLM policy for the `sornav` (and `no-target-gate`) variant, when set.
     pub llm: Option<LlmSettings>,
     /// Top-down maps: the first this many episodes of every variant, plus
     /// up to this many episodes in which the agent relocated.
@@ -278,12 +288,13 @@ pub struct RunOutcome {
 }
 
 /// The agent variants by name (`oracle` is the simulator's own).
-pub const VARIANTS: [&str; 6] = [
+pub const VARIANTS: [&str; 7] = [
     "sornav",
     "no-gate",
     "nearest-frontier",
     "semantic-ranking",
     "single-floor",
+    "no-target-gate",
     "oracle",
 ];
 
@@ -330,6 +341,7 @@ impl EvalConfig {
         self.camera
             .validate()
             .map_err(|e| HarnessError::Config(format!("camera: {e}")))?;
+        self.check_noise_preset()?;
         self.run
             .validate()
             .map_err(|e| HarnessError::Config(format!("episode rules: {e}")))?;
@@ -345,6 +357,35 @@ impl EvalConfig {
             }
         }
         Ok(())
+    }
+}
+
+/// [`EvalConfig::noise_preset`] of rates read from a file.
+pub const CUSTOM_NOISE: &str = "custom";
+
+impl EvalConfig {
+    /// The noise label agrees with the rates: a preset's name goes with
+    /// exactly its rates, [`CUSTOM_NOISE`] with any active rates, and no
+    /// label with no noise (so `run.json` never names rates it did not use).
+    fn check_noise_preset(&self) -> Result<(), HarnessError> {
+        let rates = &self.camera.noise;
+        match self.noise_preset.as_deref() {
+            None if rates.is_active() => Err(HarnessError::Config(
+                "camera.noise has active rates but no noise_preset names them".into(),
+            )),
+            None | Some(CUSTOM_NOISE) => Ok(()),
+            Some(name) => {
+                let preset = NoisePreset::from_name(name)
+                    .map_err(|e| HarnessError::Config(e.to_string()))?;
+                if preset.config() == *rates {
+                    Ok(())
+                } else {
+                    Err(HarnessError::Config(format!(
+                        "noise preset '{name}' does not match camera.noise (use '{CUSTOM_NOISE}' for other rates)"
+                    )))
+                }
+            }
+        }
     }
 }
 
@@ -636,7 +677,7 @@ fn factory(
         .with_variant(variant)
         .map_err(AgentError::from)?;
     let mut policy: Option<Box<dyn Fn() -> Result<BoxedPolicy, AgentError> + Send + Sync>> = None;
-    if variant == Variant::Sornav
+    if matches!(variant, Variant::Sornav | Variant::NoTargetGate)
         && let (Some(settings), Some(transport)) = (&config.llm, llm)
     {
         agent.policy = PolicyConfig::Llm(settings.config.clone());

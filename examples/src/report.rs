@@ -54,6 +54,9 @@ struct SummaryFile<'a> {
     width: u32,
     height: u32,
     seed: u64,
+    /// The sensor-noise preset (`--noise`), absent for a noiseless run.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    noise: Option<&'a str>,
 }
 
 fn pct(x: f64) -> String {
@@ -87,6 +90,7 @@ pub fn write(
         width: config.camera.width,
         height: config.camera.height,
         seed: config.seed,
+        noise: config.noise_preset.as_deref(),
     };
     let path = dir.join("summary.json");
     let text = serde_json::to_string_pretty(&summary).map_err(|e| io(&path, e))?;
@@ -224,6 +228,19 @@ fn markdown(
         config.seed,
         run_wall_s.map_or(String::new(), |w| format!(" This run took {w:.0} s.")),
     );
+    if let Some(preset) = &config.noise_preset {
+        let n = &config.camera.noise;
+        let _ = writeln!(
+            s,
+            "Sensor noise `{preset}`: depth sigma {} z^2 m, {} % dropped returns, {} % boundary label flips, {} % of the objects in view missed per frame, a false-positive blob in {} % of the frames (radius {} of the width).\n",
+            n.depth_sigma,
+            100.0 * n.missing_rate,
+            100.0 * n.boundary_flip_rate,
+            100.0 * n.missed_detection_rate,
+            100.0 * n.false_positive_rate,
+            n.false_positive_radius,
+        );
+    }
     let _ = writeln!(
         s,
         "Success (SR) is Habitat's: STOP within 0.1 m (geodesic) of a goal view point. SR@1m: STOP within 1 m of a goal object (the paper's boundary). Rates in %, CI = Wilson 95 %. Failure classes (the cause) are exclusive, in the order step limit, timeout, false stop, other. Cross-floor is a flag apart from the cause: the goal view point nearest to the start lies on another navmesh level than the start (levels: large walkable surfaces at one height, numbered from the lowest; floors between = |goal level - start level|).\n"

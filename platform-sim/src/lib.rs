@@ -106,7 +106,7 @@ pub use agent::{Action, Agent, AgentConfig, AgentError};
 pub use episodes::{Episode, EpisodeError, ObjectGoal, ViewPoint};
 pub use follow::{FollowerConfig, MoveOutcome, WaypointFollower};
 pub use metrics::{EpisodeResult, Outcome, Summary};
-pub use noise::{NoiseConfig, NoiseModel};
+pub use noise::{NoiseConfig, NoiseModel, NoisePreset, UnknownNoisePreset};
 pub use policy::{Oracle, Policy, RandomWalk, StopAtOnce};
 pub use render::{Bvh, Camera, CameraConfig, CameraPose, Frame, RenderError};
 pub use run::{Observation, RunConfig, SimConfig, SimError, Simulator, run_episode};

@@ -180,18 +180,24 @@ pub enum Variant {
     /// SOR-Nav on one floor: stairs off (`levels.allow_stairs = false`),
     /// the agent of a robot that cannot climb.
     SingleFloor,
+    /// SOR-Nav without the target gate: the first detection of the target
+    /// confirms it ([`GateConfig::first_sight`]: `N_obs = 1`, misses never
+    /// expire a candidate, arrival confirms without a fresh detection).
+    /// The gate's ablation; not in the default job.
+    NoTargetGate,
     /// The simulator's ground-truth oracle (upper bound); not an agent.
     Oracle,
 }
 
 impl Variant {
-    /// All six, in the evaluation's order.
-    pub const ALL: [Variant; 6] = [
+    /// All seven, in the evaluation's order.
+    pub const ALL: [Variant; 7] = [
         Variant::Sornav,
         Variant::NoGate,
         Variant::NearestFrontier,
         Variant::SemanticRanking,
         Variant::SingleFloor,
+        Variant::NoTargetGate,
         Variant::Oracle,
     ];
 
@@ -203,6 +209,7 @@ impl Variant {
             Variant::NearestFrontier => "nearest-frontier",
             Variant::SemanticRanking => "semantic-ranking",
             Variant::SingleFloor => "single-floor",
+            Variant::NoTargetGate => "no-target-gate",
             Variant::Oracle => "oracle",
         }
     }
@@ -369,10 +376,12 @@ impl AgentConfig {
     }
 
     /// This configuration turned into an evaluation variant: only the
-    /// context policy, the frontier ordering and (for
-    /// [`Variant::SingleFloor`]) `frontier.levels.allow_stairs` change. For
-    /// [`Variant::Sornav`] and [`Variant::SingleFloor`] the configured policy
-    /// is kept (commonsense by default, or an LLM policy).
+    /// context policy, the frontier ordering, (for [`Variant::SingleFloor`])
+    /// `frontier.levels.allow_stairs` and (for [`Variant::NoTargetGate`])
+    /// the gate's confirmation ([`GateConfig::first_sight`]) change. For
+    /// [`Variant::Sornav`], [`Variant::SingleFloor`] and
+    /// [`Variant::NoTargetGate`] the configured policy is kept
+    /// (commonsense by default, or an LLM policy).
     ///
     /// # Errors
     /// [`ConfigError::NotAnAgentVariant`] for [`Variant::Oracle`].
@@ -390,6 +399,13 @@ impl AgentConfig {
                 }
                 self.ordering = FrontierOrdering::Tsp;
                 self.frontier.levels.allow_stairs = false;
+            }
+            Variant::NoTargetGate => {
+                if self.policy == PolicyConfig::NeverRelocate {
+                    self.policy = PolicyConfig::default();
+                }
+                self.ordering = FrontierOrdering::Tsp;
+                self.gate = self.gate.first_sight();
             }
             Variant::NoGate => {
                 self.policy = PolicyConfig::NeverRelocate;

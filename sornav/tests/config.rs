@@ -215,3 +215,32 @@ fn agent_is_send() {
     assert_send::<sornav::Agent>();
     assert_send::<sornav::AgentSnapshot>();
 }
+
+/// `no-target-gate` is SOR-Nav with the gate's confirmation bypassed (the
+/// first detection confirms) and nothing else changed.
+#[test]
+fn no_target_gate_confirms_on_first_sight_and_changes_nothing_else() {
+    let sornav = AgentConfig::for_variant(Variant::Sornav).unwrap();
+    let ablation = AgentConfig::for_variant(Variant::NoTargetGate).unwrap();
+    assert_eq!(
+        Variant::from_name("no-target-gate"),
+        Some(Variant::NoTargetGate)
+    );
+    assert_eq!(
+        (
+            ablation.gate.n_obs,
+            ablation.gate.n_miss,
+            ablation.gate.verify_on_arrival
+        ),
+        (1, u32::MAX, false)
+    );
+    assert_eq!(ablation.gate.n_min, sornav.gate.n_min);
+    assert_eq!(
+        AgentConfig {
+            gate: sornav.gate,
+            ..ablation
+        },
+        sornav
+    );
+    assert!(sornav.gate.verify_on_arrival && sornav.gate.n_obs == 3);
+}

@@ -33,6 +33,11 @@ pub struct GateConfig {
     /// Number of gate updates during which a rejected candidate may not be
     /// selected again.
     pub reject_cooldown: u32,
+    /// Navigation verification (`b_nav`): on arrival a fresh detection
+    /// within [`verify_window`](Self::verify_window) updates must confirm
+    /// the candidate. Off, arrival confirms it at once. On by default (the
+    /// paper's gate); [`GateConfig::first_sight`] turns it off.
+    pub verify_on_arrival: bool,
 }
 
 impl Default for GateConfig {
@@ -44,11 +49,35 @@ impl Default for GateConfig {
             negative_evidence: false,
             verify_window: 3,
             reject_cooldown: 30,
+            verify_on_arrival: true,
         }
     }
 }
 
 impl GateConfig {
+    /// No gate: the first detection of a candidate (with at least `N_min`
+    /// voxels) selects it, misses never expire it (`N_miss = u32::MAX`), and
+    /// arrival confirms it without a fresh detection
+    /// ([`verify_on_arrival`](Self::verify_on_arrival) off). `n_min` and the
+    /// cool-down of a failed approach are kept from `self`. The ablation of
+    /// the gate against a sensor that lies.
+    ///
+    /// # Example
+    /// ```
+    /// use sornav_target_gate::GateConfig;
+    /// let c = GateConfig::default().first_sight();
+    /// assert_eq!((c.n_obs, c.n_miss, c.verify_on_arrival), (1, u32::MAX, false));
+    /// ```
+    #[must_use]
+    pub fn first_sight(self) -> Self {
+        Self {
+            n_obs: 1,
+            n_miss: u32::MAX,
+            verify_on_arrival: false,
+            ..self
+        }
+    }
+
     /// Checks the parameters.
     ///
     /// # Errors

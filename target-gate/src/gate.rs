@@ -240,12 +240,25 @@ impl<C: PartialEq> TargetGate<C> {
     /// turned toward it (for example a `NAV_TO_OBJECT` mission reached with
     /// its heading requirement). Starts verification: a detection in one of
     /// the next [`GateConfig::verify_window`] updates confirms the target.
+    /// With [`GateConfig::verify_on_arrival`] off, arrival confirms it at
+    /// once.
     ///
     /// # Errors
     /// [`GateError::WrongPhase`] unless approaching, [`GateError::NotActive`]
     /// when `object` is not the candidate being approached.
     pub fn on_arrived(&mut self, object: ObjectId) -> Result<Vec<GateEvent>, GateError> {
         self.expect_approaching(object)?;
+        if !self.tracker.config().verify_on_arrival {
+            let mut events = vec![GateEvent::Arrived(object)];
+            match self.tracker.track(object).map(|t| t.centre) {
+                Some(centre) => {
+                    self.phase = Phase::Confirmed { object, centre };
+                    events.push(GateEvent::Confirmed(object));
+                }
+                None => self.abandon(object, AbandonReason::Expired, &mut events),
+            }
+            return Ok(events);
+        }
         let now = self.tracker.updates();
         self.phase = Phase::Verify {
             object,

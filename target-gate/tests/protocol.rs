@@ -323,3 +323,48 @@ proptest! {
         }
     }
 }
+
+/// `GateConfig::first_sight` (the `no-target-gate` ablation): one detection
+/// selects the candidate, misses during the approach never drop it, and
+/// arrival confirms it without a fresh detection.
+#[test]
+fn first_sight_confirms_on_the_first_detection() {
+    let mut g = TargetGate::new(1, GateConfig::default().first_sight()).unwrap();
+    let events = g.update(&[report(4, true)], &robot()).unwrap();
+    assert_eq!(
+        events,
+        vec![
+            GateEvent::Tracked(ObjectId(4)),
+            GateEvent::Selected(ObjectId(4))
+        ]
+    );
+    for _ in 0..100 {
+        g.update(&[report(4, false)], &robot()).unwrap();
+    }
+    assert!(matches!(
+        g.command(),
+        GateCommand::NavToObject {
+            object: ObjectId(4),
+            ..
+        }
+    ));
+    assert_eq!(
+        g.on_arrived(ObjectId(4)).unwrap(),
+        vec![
+            GateEvent::Arrived(ObjectId(4)),
+            GateEvent::Confirmed(ObjectId(4))
+        ]
+    );
+    assert!(g.is_confirmed());
+    assert_eq!(
+        g.command(),
+        GateCommand::Stop {
+            object: ObjectId(4),
+            centre: Point3::new(4.0, 0.0, 0.0)
+        }
+    );
+    // The paper's gate needs N_obs = 3 detections for the same candidate.
+    let mut paper = gate();
+    paper.update(&[report(4, true)], &robot()).unwrap();
+    assert_eq!(paper.command(), GateCommand::Search);
+}

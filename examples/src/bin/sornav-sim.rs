@@ -20,7 +20,7 @@ use sornav_examples::harness::{
 use sornav_examples::scenes::parse_scene_spec;
 use sornav_examples::summary::summarize;
 use sornav_examples::{compare, report};
-use sornav_platform_sim::{CameraConfig, RunConfig};
+use sornav_platform_sim::{CameraConfig, NoiseConfig, NoisePreset, RunConfig};
 
 /// Run ObjectNav evaluations of SOR-Nav and its baselines on the CPU
 /// simulator (procedural houses, Sweet Home 3D homes, glTF scenes).
@@ -95,7 +95,8 @@ struct RunArgs {
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     categories: Vec<String>,
     /// Variants (comma-separated): sornav, no-gate, nearest-frontier,
-    /// semantic-ranking, single-floor, oracle. Default: sornav.
+    /// semantic-ranking, single-floor, no-target-gate (the first detection
+    /// confirms the target), oracle. Default: sornav.
     #[arg(long, value_delimiter = ',', value_name = "LIST")]
     variants: Vec<String>,
     /// Seed of scenes, episodes and sensor noise.
@@ -107,6 +108,18 @@ struct RunArgs {
     /// Output directory.
     #[arg(long, value_name = "DIR", default_value = "out/sornav-sim")]
     out: PathBuf,
+    /// Sensor-noise preset: `off` (default, a perfect sensor) or
+    /// `detector` (an open-vocabulary detector on a structured-light depth
+    /// camera: depth noise, dropped returns, boundary label flips, missed
+    /// objects, false-positive blobs). The rates and their sources are in
+    /// the platform-sim README; they are recorded in run.json.
+    #[arg(long, value_name = "PRESET", value_parser = parse_noise)]
+    noise: Option<NoisePreset>,
+    /// Sensor-noise rates from a TOML file (the fields of
+    /// `sornav_platform_sim::NoiseConfig`; missing fields are off) instead
+    /// of a preset; recorded in run.json as preset `custom`.
+    #[arg(long, value_name = "FILE", conflicts_with = "noise")]
+    noise_config: Option<PathBuf>,
     /// Sensor width in pixels (Habitat: 640).
     #[arg(long, value_name = "W", default_value_t = 640)]
     width: u32,
@@ -194,6 +207,29 @@ fn parse_shard(s: &str) -> Result<(usize, usize), String> {
         return Err(format!("need 0 <= i < n, got {i}/{n}"));
     }
     Ok((i, n))
+}
+
+fn parse_noise(s: &str) -> Result<NoisePreset, String> {
+    NoisePreset::from_name(s).map_err(|e| e.to_string())
+}
+
+/// The noise rates of a run and the label recorded with them (`None` for
+/// a noiseless run, so its run.json is unchanged).
+fn noise_settings(a: &RunArgs) -> Result<(NoiseConfig, Option<String>), String> {
+    if let Some(path) = &a.noise_config {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("--noise-config {}: {e}", path.display()))?;
+        let rates: NoiseConfig =
+            toml::from_str(&text).map_err(|e| format!("--noise-config {}: {e}", path.display()))?;
+        rates
+            .validate()
+            .map_err(|e| format!("--noise-config {}: {e}", path.display()))?;
+        return Ok((rates, Some(harness::CUSTOM_NOISE.to_owned())));
+    }
+    match a.noise.unwrap_or_default() {
+        NoisePreset::Off => Ok((NoiseConfig::default(), None)),
+        p => Ok((p.config(), Some(p.name().to_owned()))),
+    }
 }
 
 fn parse_latency(s: &str) -> Result<LlmLatency, String> {
@@ -339,6 +375,7 @@ fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
         None => sim_agent_config(),
     };
     let llm = llm_settings(a, &agent)?;
+    let (noise, noise_preset) = noise_settings(a)?;
     Ok(EvalConfig {
         scenes,
         models: a.models.clone().or_else(default_models),
@@ -349,8 +386,10 @@ fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
         camera: CameraConfig {
             width: a.width,
             height: a.height,
+            noise,
             ..CameraConfig::default()
         },
+        noise_preset,
         run: RunConfig {
             max_actions: a.max_actions,
             wall_clock_s: a.wall_clock,

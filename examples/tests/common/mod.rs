@@ -41,6 +41,7 @@ pub fn small_eval(
             height: 72,
             ..CameraConfig::default()
         },
+        noise_preset: None,
         run: RunConfig {
             max_actions,
             ..RunConfig::default()
