@@ -28,6 +28,7 @@ use crate::error::AgentError;
 use crate::observation::{Observation, ObservationReport, Sensor};
 use crate::ordering::{self, OrderingInput, Route};
 use crate::path_cost::MapPathCost;
+use crate::revisit::Visits;
 use crate::snapshot::{
     AgentSnapshot, AgentStats, Decision, DecisionAction, DecisionStep, ObjectRecord,
     OccupancyRaster, RelocationRecord,
@@ -166,6 +167,15 @@ const REVISIT_LIMIT: u32 = 3;
 /// frontier's viewpoint.
 const REVISIT_RADIUS_M: f64 = 0.4;
 
+/// Most "look at an unreached frontier" moves per target before the floor
+/// is declared exhausted (see `Agent::unreached_look`).
+const UNREACHED_LOOK_LIMIT: u32 = 3;
+
+/// Radius (m) around an unreached frontier's viewpoint within which a
+/// traversable place to look at it from is sought; a frontier within this
+/// distance of one already looked at is not looked at again.
+const UNREACHED_LOOK_RADIUS_M: f64 = 1.5;
+
 /// How long the robot stands at a reached frontier before it is excluded
 /// (two control steps at 2 Hz: time to look at it).
 const LOOK_TIME: Duration = Duration::from_secs(1);
@@ -207,9 +217,8 @@ pub struct Agent {
     excluded: BTreeSet<FrontierId>,
     /// Arrivals at each frontier and the time of the first.
     arrivals: BTreeMap<FrontierId, (u32, Duration)>,
-    /// Places where exploration missions arrived, with their counts (see
-    /// [`REVISIT_LIMIT`]).
-    visits: Vec<(Point3<f64>, u32)>,
+    /// Places where exploration missions arrived (see [`REVISIT_LIMIT`]).
+    visits: Visits,
     /// The last pose at which a frontier was reachable.
     last_placed: Option<Point3<f64>>,
     /// The excluded stair ends were retried once (see `retry_stairs`).
@@ -220,6 +229,9 @@ pub struct Agent {
     trail: Vec<Point3<f64>>,
     /// Consecutive decisions spent looking around off a known floor.
     looking_around: u32,
+    /// Viewpoints of unreached frontiers the robot went to look at, and
+    /// how many such moves it made (see `unreached_look`).
+    looked_at: Vec<Point3<f64>>,
     /// The robot walked back along its trail since it last stood on a
     /// known floor (a second time it is exhausted instead).
     walked_back: bool,
@@ -509,13 +521,14 @@ impl Agent {
             clusters: None,
             excluded: BTreeSet::new(),
             arrivals: BTreeMap::new(),
-            visits: Vec::new(),
+            visits: Visits::new(REVISIT_LIMIT, REVISIT_RADIUS_M),
             last_placed: None,
             stairs_retried: false,
             viewer: None,
             stop_moves: 0,
             trail: Vec::new(),
             looking_around: 0,
+            looked_at: Vec::new(),
             walked_back: false,
             relocation: None,
             last_outcome: None,
@@ -871,7 +884,7 @@ impl Agent {
                     && !stair
                     && let Some(pose) = self.pose
                 {
-                    self.record_visit(pose.position);
+                    self.visits.record(pose.position);
                 }
                 if failed && !stair {
                     self.exclude(id);
@@ -900,44 +913,20 @@ impl Agent {
         self.last_outcome = Some(outcome);
     }
 
-    /// Counts an exploration arrival at `at` (see [`REVISIT_LIMIT`]).
-    fn record_visit(&mut self, at: Point3<f64>) {
-        let near = |p: &Point3<f64>| {
-            (p.xy() - at.xy()).norm() <= REVISIT_RADIUS_M && (p.z - at.z).abs() <= REVISIT_RADIUS_M
-        };
-        match self.visits.iter_mut().find(|(p, _)| near(p)) {
-            Some((_, n)) => *n += 1,
-            None => self.visits.push((at, 1)),
-        }
-    }
-
     /// Excludes the frontiers (not stair ends) of G_F whose viewpoints lie
     /// at a place exploration missions reached [`REVISIT_LIMIT`] times.
     ///
     /// # Complexity
-    /// O(n v) for n frontiers and v visited places.
+    /// O(n p) for n frontiers and p visited places.
     fn exclude_revisited(&mut self) {
-        let spent: Vec<Point3<f64>> = self
-            .visits
-            .iter()
-            .filter(|(_, n)| *n >= REVISIT_LIMIT)
-            .map(|(p, _)| *p)
-            .collect();
-        if spent.is_empty() {
+        if !self.visits.any_spent() {
             return;
         }
         let ids: Vec<FrontierId> = self
             .frontiers
             .graph()
             .nodes()
-            .filter(|f| !self.excluded.contains(&f.id))
-            .filter(|f| {
-                let v = f.viewpoint3();
-                spent.iter().any(|p| {
-                    (p.xy() - v.xy()).norm() <= REVISIT_RADIUS_M
-                        && (p.z - v.z).abs() <= REVISIT_RADIUS_M
-                })
-            })
+            .filter(|f| !self.excluded.contains(&f.id) && self.visits.is_spent(&f.viewpoint3()))
             .map(|f| f.id)
             .filter(|&id| !self.frontiers.is_stair_frontier(id))
             .collect();
@@ -1567,6 +1556,24 @@ impl Agent {
                             "floor exhausted: retrying the excluded stair ends once ({reason})"
                         ),
                     ),
+                    None if active.is_none() && self.unreached_look_allowed() => {
+                        match self.unreached_look(pose)? {
+                            Some((path, at)) => self.retreat(
+                                now,
+                                step,
+                                path,
+                                format!(
+                                    "no reachable frontier: looking at the unreached frontier at ({:.1}, {:.1}) from the nearest reachable place ({reason})",
+                                    at.x, at.y
+                                ),
+                            )?,
+                            None => self.keep_going(
+                                now,
+                                step,
+                                format!("no reachable frontier and no place to look at an unreached one from ({reason})"),
+                            ),
+                        }
+                    }
                     None if active.is_none() => {
                         self.decide(
                             now,
@@ -1591,6 +1598,99 @@ impl Agent {
             }
         };
         Ok(result)
+    }
+
+    /// Whether the exhaustion check may still look at an unreached
+    /// frontier (fewer than [`UNREACHED_LOOK_LIMIT`] looks so far).
+    fn unreached_look_allowed(&self) -> bool {
+        (self.looked_at.len() as u32) < UNREACHED_LOOK_LIMIT
+    }
+
+    /// The exhaustion check: before the floor is declared exhausted, a
+    /// frontier of G_F that the robot cannot reach (behind a gap narrower
+    /// than the robot on the map, a drop-off, a stair head seen from afar)
+    /// may still show the way on from closer. Takes the nearest such
+    /// frontier on the robot's floor not looked at yet (stair ends and
+    /// excluded frontiers aside) and returns the path to the reachable
+    /// traversable place nearest to its viewpoint (within
+    /// [`UNREACHED_LOOK_RADIUS_M`], further than half a metre from the
+    /// robot), with the viewpoint. Each call marks the frontier looked at,
+    /// so at most [`UNREACHED_LOOK_LIMIT`] looks happen per target.
+    /// `Ok(None)` when no frontier is unreached or none has a reachable
+    /// place near it.
+    ///
+    /// # Complexity
+    /// O(n) over the n frontiers, plus up to eight shortest-path searches.
+    fn unreached_look(
+        &mut self,
+        pose: &RobotPose,
+    ) -> Result<Option<(Vec<Point3<f64>>, Point3<f64>)>, AgentError> {
+        let Some(level) = self.current_level() else {
+            return Ok(None);
+        };
+        let feet = pose.position;
+        let graph = self.frontiers.graph();
+        let mut unreached: Vec<(f64, Point3<f64>)> = graph
+            .nodes()
+            .filter(|f| !self.excluded.contains(&f.id) && !self.frontiers.is_stair_frontier(f.id))
+            .filter(|f| {
+                graph
+                    .cost(NodeId::Robot, NodeId::Frontier(f.id))
+                    .is_none_or(|c| !c.is_finite())
+            })
+            .map(|f| f.viewpoint3())
+            .filter(|v| (v.z - feet.z).abs() <= REVISIT_RADIUS_M)
+            .filter(|v| {
+                !self
+                    .looked_at
+                    .iter()
+                    .any(|p| (p.xy() - v.xy()).norm() <= UNREACHED_LOOK_RADIUS_M)
+            })
+            .map(|v| ((v.xy() - feet.xy()).norm(), v))
+            .collect();
+        unreached.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let Some(&(_, at)) = unreached.first() else {
+            return Ok(None);
+        };
+        self.looked_at.push(at);
+        let Some(level_map) = self.frontiers.level_map(level) else {
+            return Ok(None);
+        };
+        let grid = level_map.grid();
+        let floor = level_map.config().grid.floor_z;
+        let step = grid.resolution().max(0.05);
+        let n = (UNREACHED_LOOK_RADIUS_M / step).ceil() as i64;
+        let mut places: Vec<(f64, Point3<f64>)> = Vec::new();
+        for i in -n..=n {
+            for j in -n..=n {
+                let p = Point2::new(at.x + i as f64 * step, at.y + j as f64 * step);
+                let d = (p - at.xy()).norm();
+                if d > UNREACHED_LOOK_RADIUS_M || (p - feet.xy()).norm() <= 0.5 {
+                    continue;
+                }
+                if grid.cell_of(&p).is_ok_and(|c| grid.is_traversable(c)) {
+                    places.push((d, Point3::new(p.x, p.y, floor)));
+                }
+            }
+        }
+        places.sort_by(|a, b| a.0.total_cmp(&b.0));
+        // Up to eight places, nearest first, each at least 0.3 m from the
+        // ones tried before (the cells right next to an unreached frontier
+        // are most often unreached too).
+        let mut tried: Vec<Point3<f64>> = Vec::new();
+        for (_, p) in places {
+            if tried.len() >= 8 {
+                break;
+            }
+            if tried.iter().any(|q| (q.xy() - p.xy()).norm() < 0.3) {
+                continue;
+            }
+            tried.push(p);
+            if let Some(edge) = self.frontiers.path(&feet, &p)? {
+                return Ok(Some((edge.path, at)));
+            }
+        }
+        Ok(None)
     }
 
     /// Dispatches a retreat (a relocation outside any cluster) along

@@ -156,6 +156,7 @@ mod error;
 mod observation;
 mod ordering;
 mod path_cost;
+mod revisit;
 mod snapshot;
 mod target;
 pub mod toml_file;

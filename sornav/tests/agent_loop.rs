@@ -294,3 +294,49 @@ fn a_confirmed_target_is_reached_in_view_before_stop() {
     assert_eq!(stats.stops_out_of_view, 0);
     assert!(reach <= 0.85, "stopped {reach} m from the TV");
 }
+
+/// The exhaustion check: a frontier seen through a gap narrower than the
+/// robot cannot be reached; before declaring the floor exhausted the agent
+/// goes to the reachable place nearest to it and looks (at most three such
+/// moves), then ends the search.
+#[test]
+fn unreached_frontiers_are_looked_at_before_the_floor_is_exhausted() {
+    // A closed 6 m x 4 m room with a 0.3 m slit in its east wall; open
+    // floor beyond it.
+    let world = World {
+        blocks: vec![
+            wall(-0.1, -0.1, 6.1, 0.1),
+            wall(-0.1, 3.9, 6.1, 4.1),
+            wall(-0.1, -0.1, 0.1, 4.1),
+            wall(5.9, -0.1, 6.1, 1.85),
+            wall(5.9, 2.15, 6.1, 4.1),
+        ],
+    };
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("find the television").unwrap();
+    let mut robot = Robot::new(1.5, 2.0);
+    let episode = run(&mut agent, &world, &mut robot, 400);
+    assert!(
+        matches!(
+            episode.commands.last(),
+            Some(AgentCommand::Exhausted | AgentCommand::FloorExhausted { .. })
+        ),
+        "the search ends: {:?}",
+        episode.commands.last()
+    );
+    let looks: Vec<_> = agent
+        .decisions()
+        .iter()
+        .filter(|d| d.reason.contains("looking at the unreached frontier"))
+        .collect();
+    assert!(!looks.is_empty(), "the unreached frontier was looked at");
+    assert!(looks.len() <= 3, "{} looks", looks.len());
+    // The robot went toward the slit to look.
+    assert!(
+        agent
+            .pose()
+            .is_some_and(|p| (p.position.x - 6.0).abs() < 2.0),
+        "ended at {:?}",
+        agent.pose()
+    );
+}
