@@ -229,9 +229,11 @@ pub struct Agent {
     trail: Vec<Point3<f64>>,
     /// Consecutive decisions spent looking around off a known floor.
     looking_around: u32,
-    /// Viewpoints of unreached frontiers the robot went to look at, and
-    /// how many such moves it made (see `unreached_look`).
+    /// Viewpoints of unreached frontiers the robot went to look at (see
+    /// `unreached_look`).
     looked_at: Vec<Point3<f64>>,
+    /// Attempts of the exhaustion check so far (see `unreached_look`).
+    unreached_looks: u32,
     /// The robot walked back along its trail since it last stood on a
     /// known floor (a second time it is exhausted instead).
     walked_back: bool,
@@ -529,6 +531,7 @@ impl Agent {
             trail: Vec::new(),
             looking_around: 0,
             looked_at: Vec::new(),
+            unreached_looks: 0,
             walked_back: false,
             relocation: None,
             last_outcome: None,
@@ -1603,7 +1606,7 @@ impl Agent {
     /// Whether the exhaustion check may still look at an unreached
     /// frontier (fewer than [`UNREACHED_LOOK_LIMIT`] looks so far).
     fn unreached_look_allowed(&self) -> bool {
-        (self.looked_at.len() as u32) < UNREACHED_LOOK_LIMIT
+        self.unreached_looks < UNREACHED_LOOK_LIMIT
     }
 
     /// The exhaustion check: before the floor is declared exhausted, a
@@ -1614,8 +1617,9 @@ impl Agent {
     /// excluded frontiers aside) and returns the path to the reachable
     /// traversable place nearest to its viewpoint (within
     /// [`UNREACHED_LOOK_RADIUS_M`], further than half a metre from the
-    /// robot), with the viewpoint. Each call marks the frontier looked at,
-    /// so at most [`UNREACHED_LOOK_LIMIT`] looks happen per target.
+    /// robot), with the viewpoint. Each call counts as one of the
+    /// [`UNREACHED_LOOK_LIMIT`] attempts per target and marks the frontier
+    /// looked at; with no unreached frontier left the attempts end.
     /// `Ok(None)` when no frontier is unreached or none has a reachable
     /// place near it.
     ///
@@ -1625,6 +1629,7 @@ impl Agent {
         &mut self,
         pose: &RobotPose,
     ) -> Result<Option<(Vec<Point3<f64>>, Point3<f64>)>, AgentError> {
+        self.unreached_looks += 1;
         let Some(level) = self.current_level() else {
             return Ok(None);
         };
@@ -1650,6 +1655,8 @@ impl Agent {
             .collect();
         unreached.sort_by(|a, b| a.0.total_cmp(&b.0));
         let Some(&(_, at)) = unreached.first() else {
+            // Nothing left to look at: the floor is exhausted.
+            self.unreached_looks = UNREACHED_LOOK_LIMIT;
             return Ok(None);
         };
         self.looked_at.push(at);

@@ -88,6 +88,20 @@ impl Viewer {
         self.half_vfov
             .is_none_or(|h| d.z.atan2(d.xy().norm()).abs() <= (h - margin_rad).max(0.0))
     }
+
+    /// How many of `points` lie in the vertical view from `eye` (less
+    /// `margin_rad`) and pass the line test `line`.
+    fn count_in_view(
+        &self,
+        eye: &Point3<f64>,
+        margin_rad: f64,
+        points: impl Iterator<Item = Point3<f64>>,
+        line: impl Fn(&Point3<f64>) -> bool,
+    ) -> usize {
+        points
+            .filter(|p| self.in_vertical_view(eye, p, margin_rad) && line(p))
+            .count()
+    }
 }
 
 /// What makes a pose a view point of an object.
@@ -174,13 +188,9 @@ impl ObjectView {
         vfov_margin_rad: f64,
     ) -> f64 {
         let eye = viewer.eye(feet);
-        let seen = self
-            .points
-            .iter()
-            .filter(|p| {
-                viewer.in_vertical_view(&eye, p, vfov_margin_rad) && self.line_clear(map, &eye, p)
-            })
-            .count();
+        let seen = viewer.count_in_view(&eye, vfov_margin_rad, self.points.iter().copied(), |p| {
+            self.line_clear(map, &eye, p)
+        });
         seen as f64 / self.points.len() as f64
     }
 
@@ -274,12 +284,9 @@ impl ObjectView {
         vfov_margin_rad: f64,
     ) -> usize {
         let eye = viewer.eye(feet);
-        self.box_samples()
-            .filter(|p| {
-                viewer.in_vertical_view(&eye, p, vfov_margin_rad)
-                    && self.first_hit_is_object(map, &eye, p)
-            })
-            .count()
+        viewer.count_in_view(&eye, vfov_margin_rad, self.box_samples(), |p| {
+            self.first_hit_is_object(map, &eye, p)
+        })
     }
 
     /// Whether `feet` is a view point of the object under `rule`; the
@@ -373,7 +380,13 @@ pub(crate) mod tests {
                             lo.y + 0.025 * y as f64,
                             lo.z + 0.025 * z as f64,
                         );
-                        own.insert(VoxelKey::from_point(&p, res));
+                        // The map stores f32 points: key them as it does.
+                        let stored = Point3::new(
+                            f64::from(p.x as f32),
+                            f64::from(p.y as f32),
+                            f64::from(p.z as f32),
+                        );
+                        own.insert(VoxelKey::from_point(&stored, res));
                         points.push(LabeledPoint::new(
                             p.x as f32,
                             p.y as f32,
@@ -421,7 +434,8 @@ pub(crate) mod tests {
             object.visible_share(&map, &feet(0.5, 0.0), &LEVEL, 0.0),
             0.0
         );
-        assert!(object.visible_share(&map, &feet(2.6, 1.2), &LEVEL, 0.0) > 0.25);
+        let share = object.visible_share(&map, &feet(2.6, 1.2), &LEVEL, 0.0);
+        assert!(share >= RULE.min_visible_share, "{share}");
         // The occluder is seen from the front.
         let occluder = ObjectView::new(&keys[0], map.resolution()).unwrap();
         assert!(occluder.visible_share(&map, &feet(0.2, 0.0), &LEVEL, 0.0) > 0.25);
