@@ -167,6 +167,13 @@ const REVISIT_LIMIT: u32 = 3;
 /// frontier's viewpoint.
 const REVISIT_RADIUS_M: f64 = 0.4;
 
+/// A move of the exhaustion check: the path to the place to look from,
+/// and the viewpoint of the unreached frontier to look at.
+struct UnreachedLook {
+    path: Vec<Point3<f64>>,
+    at: Point3<f64>,
+}
+
 /// Most "look at an unreached frontier" moves per target before the floor
 /// is declared exhausted (see `Agent::unreached_look`).
 const UNREACHED_LOOK_LIMIT: u32 = 3;
@@ -1561,7 +1568,7 @@ impl Agent {
                     ),
                     None if active.is_none() && self.unreached_look_allowed() => {
                         match self.unreached_look(pose)? {
-                            Some((path, at)) => self.retreat(
+                            Some(UnreachedLook { path, at }) => self.retreat(
                                 now,
                                 step,
                                 path,
@@ -1625,10 +1632,7 @@ impl Agent {
     ///
     /// # Complexity
     /// O(n) over the n frontiers, plus up to eight shortest-path searches.
-    fn unreached_look(
-        &mut self,
-        pose: &RobotPose,
-    ) -> Result<Option<(Vec<Point3<f64>>, Point3<f64>)>, AgentError> {
+    fn unreached_look(&mut self, pose: &RobotPose) -> Result<Option<UnreachedLook>, AgentError> {
         self.unreached_looks += 1;
         let Some(level) = self.current_level() else {
             return Ok(None);
@@ -1694,7 +1698,10 @@ impl Agent {
             }
             tried.push(p);
             if let Some(edge) = self.frontiers.path(&feet, &p)? {
-                return Ok(Some((edge.path, at)));
+                return Ok(Some(UnreachedLook {
+                    path: edge.path,
+                    at,
+                }));
             }
         }
         Ok(None)
