@@ -45,11 +45,8 @@ impl Visits {
         if !at.coords.iter().all(|c| c.is_finite()) {
             return;
         }
-        let radius = self.radius;
-        let near =
-            |p: &Point3<f64>| (p.xy() - at.xy()).norm() <= radius && (p.z - at.z).abs() <= radius;
-        match self.places.iter_mut().find(|(p, _)| near(p)) {
-            Some((_, n)) => *n += 1,
+        match self.places.iter().position(|(p, _)| self.near(p, &at)) {
+            Some(i) => self.places[i].1 += 1,
             None => self.places.push((at, 1)),
         }
     }
