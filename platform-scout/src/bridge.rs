@@ -63,6 +63,7 @@ use crate::msg::{
     PoseStamped, Quaternion, RosString, Time, Twist, TwistStamped, Vector3,
 };
 use crate::pointcloud::{CloudError, CloudView};
+use crate::streams::{Silence, StreamMonitor, StreamStatus};
 
 /// A message the node should publish.
 #[derive(Debug, Clone, PartialEq)]
@@ -319,6 +320,13 @@ pub struct Status {
     /// empty otherwise.
     #[serde(default)]
     pub stairs: Vec<[f64; 3]>,
+    /// Health of each input stream by topic (`odometry`, `semantic_scan`,
+    /// `registered_scan`, `terrain_map`): samples received, gaps and the
+    /// estimated samples missing in them, silences ([`crate::streams`]).
+    /// Samples lost before decoding are reported only here: DDS does not
+    /// report them.
+    #[serde(default)]
+    pub streams: BTreeMap<String, StreamStatus>,
     /// A sentence for operators about the outcome (in `floor_exhausted`:
     /// "not found on this floor; stairs at (x, y, z) lead to an unexplored
     /// floor"), `None` otherwise.
@@ -377,15 +385,48 @@ pub struct Bridge {
     last_error: Option<String>,
     /// Rejections by cause ([`BridgeError::cause`]).
     rejections: BTreeMap<String, Rejections>,
+    /// Health of each input stream (gaps, silence), by topic.
+    streams: BTreeMap<&'static str, Stream>,
+}
+
+/// One input stream's monitor and its rate-limited gap warning.
+#[derive(Debug, Clone, Default)]
+struct Stream {
+    monitor: StreamMonitor,
+    warn: WarnLimit,
 }
 
 /// Rejections of one cause, and their rate-limited warning.
 #[derive(Debug, Clone, Copy, Default)]
 struct Rejections {
     count: u64,
-    last_warn: Option<Duration>,
-    /// Rejections since the last warning, not logged.
+    warn: WarnLimit,
+}
+
+/// A warning logged at most once per [`REJECTION_WARN_INTERVAL`].
+#[derive(Debug, Clone, Copy, Default)]
+struct WarnLimit {
+    last: Option<Duration>,
+    /// Events since the last warning, not logged.
     suppressed: u64,
+}
+
+impl WarnLimit {
+    /// Whether to log an event at `now`: `Some(events not logged since the
+    /// last warning)` when the interval has passed, else `None` (counted as
+    /// not logged).
+    fn allow(&mut self, now: Duration) -> Option<u64> {
+        if self
+            .last
+            .is_none_or(|t| now.saturating_sub(t) >= REJECTION_WARN_INTERVAL)
+        {
+            self.last = Some(now);
+            Some(std::mem::take(&mut self.suppressed))
+        } else {
+            self.suppressed += 1;
+            None
+        }
+    }
 }
 
 /// Least time between two warnings of one rejection cause: a burst of bad
@@ -446,6 +487,7 @@ impl Bridge {
             stats: BridgeStats::default(),
             last_error: None,
             rejections: BTreeMap::new(),
+            streams: BTreeMap::new(),
         })
     }
 
@@ -532,18 +574,56 @@ impl Bridge {
     fn note_rejection(&mut self, cause: String, message: &str, now: Duration) {
         let r = self.rejections.entry(cause).or_default();
         r.count += 1;
-        if r.last_warn
-            .is_none_or(|t| now.saturating_sub(t) >= REJECTION_WARN_INTERVAL)
-        {
-            tracing::warn!(
-                total = r.count,
-                not_logged = r.suppressed,
-                "message rejected: {message}"
+        if let Some(not_logged) = r.warn.allow(now) {
+            tracing::warn!(total = r.count, not_logged, "message rejected: {message}");
+        }
+    }
+
+    /// A sample of `topic` arrived at `now` with header stamp `stamp`:
+    /// gaps in the stream (samples lost before decoding, which DDS does not
+    /// report) are counted and logged at warn, rate-limited per topic; see
+    /// [`crate::streams`].
+    fn note_sample(&mut self, topic: &'static str, stamp: Time, now: Duration) {
+        let stream = self.streams.entry(topic).or_default();
+        let stamp_s = (stamp != Time::default())
+            .then(|| f64::from(stamp.sec) + f64::from(stamp.nanosec) / 1e9);
+        let (gap, silence) = stream.monitor.on_sample(stamp_s, now);
+        if let Some(Silence::Ended { lasted_s }) = silence {
+            tracing::info!(
+                topic,
+                "{topic}: samples again after {lasted_s:.1} s of silence"
             );
-            r.last_warn = Some(now);
-            r.suppressed = 0;
-        } else {
-            r.suppressed += 1;
+        }
+        if let Some(gap) = gap {
+            let total = stream.monitor.status(now).missing_estimate;
+            if let Some(not_logged) = stream.warn.allow(now) {
+                tracing::warn!(
+                    topic,
+                    total_missing = total,
+                    gaps_not_logged = not_logged,
+                    "{topic}: about {} sample(s) missing ({:.2} s between stamps, period {:.3} s): \
+                     lost before decoding (DDS does not report it; large clouds on a \
+                     best-effort reader lose fragments)",
+                    gap.missing,
+                    gap.interval_s,
+                    gap.period_s
+                );
+            }
+        }
+    }
+
+    /// Streams that delivered samples and then fell silent: counted and
+    /// logged at warn once per silence.
+    fn check_streams(&mut self, now: Duration) {
+        for (topic, stream) in &mut self.streams {
+            if let Some(Silence::Began { for_s }) = stream.monitor.check_silence(now) {
+                tracing::warn!(
+                    topic,
+                    "{topic}: no sample for {for_s:.1} s: the publisher stopped, or its \
+                     samples are lost before decoding (DDS does not report it; clouds of \
+                     more than about 10 MB on a best-effort reader are)"
+                );
+            }
         }
     }
 
@@ -601,6 +681,7 @@ impl Bridge {
         now: Duration,
         received: Time,
     ) -> Result<(), BridgeError> {
+        self.note_sample("odometry", msg.header.stamp, now);
         self.check_frame("odometry", &msg.header, now)?;
         let age_s = stamp_difference_s(received, msg.header.stamp);
         let rates = self.config.rates;
@@ -740,6 +821,7 @@ impl Bridge {
         now: Duration,
         decode: impl FnOnce(&CloudView<'_>) -> Result<T, CloudError>,
     ) -> Result<T, BridgeError> {
+        self.note_sample(topic, msg.header.stamp, now);
         self.check_frame(topic, &msg.header, now)?;
         if self.odom.is_none() {
             self.stats.clouds_before_odometry += 1;
@@ -1020,6 +1102,7 @@ impl Bridge {
         if self.state == NodeState::Stopped {
             return out;
         }
+        self.check_streams(now);
         if self.config.relay.enabled
             && self
                 .last_cmd_vel
@@ -1217,6 +1300,11 @@ impl Bridge {
                 .collect(),
             stairs: self.stairs.clone(),
             note: self.note.clone(),
+            streams: self
+                .streams
+                .iter()
+                .map(|(topic, s)| ((*topic).to_owned(), s.monitor.status(now)))
+                .collect(),
         }
     }
 

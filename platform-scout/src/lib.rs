@@ -83,6 +83,7 @@ pub mod markers;
 pub mod msg;
 pub mod node;
 pub mod pointcloud;
+pub mod streams;
 
 /// ros2-client and RustDDS, re-exported deliberately: [`node`] hands out
 /// their (0.x) `Context`, `Node`, publisher, subscription and QoS types, so

@@ -453,6 +453,63 @@ fn one_cloud_above_the_cap_is_thinned_not_dropped() {
     );
 }
 
+/// Issue 21: samples lost before decoding (a best-effort reader drops a
+/// cloud whose fragments it cannot reassemble, and RustDDS reports nothing)
+/// are visible in the status: gaps in a stream's stamps are counted as
+/// missing samples, and a stream that stops is reported silent once, then
+/// back when it resumes.
+#[test]
+fn lost_and_silent_streams_are_reported_in_the_status() {
+    let mut b = Bridge::new(config()).unwrap();
+    let cloud = [[1.0, 0.0, 0.3, 1.0]];
+    let stamped = |s: f64| encode_xyzl(Header::new(wall(s), "map"), &cloud).unwrap();
+    let mut t_ms = 0;
+    // 10 Hz clouds; samples 12, 13 and 20 never arrive.
+    for i in 0..30u32 {
+        t_ms = u64::from(i) * 100;
+        let t = f64::from(i) * 0.1;
+        b.on_odometry_at(&odom_at(wall(t)), ms(t_ms), wall(t))
+            .unwrap();
+        if ![12, 13, 20].contains(&i) {
+            b.on_semantic_scan(&stamped(t), ms(t_ms)).unwrap();
+        }
+        b.tick(ms(t_ms));
+    }
+    let s = b.status(ms(t_ms));
+    let scan = s.streams["semantic_scan"];
+    assert_eq!(
+        (scan.received, scan.gaps, scan.missing_estimate),
+        (27, 2, 3)
+    );
+    approx::assert_relative_eq!(scan.period_s.unwrap(), 0.1, epsilon = 1e-6);
+    assert!(!scan.silent);
+    assert_eq!(s.streams["odometry"].missing_estimate, 0);
+
+    // The clouds stop (every one too large to reassemble); odometry goes on.
+    for k in 1..=80u64 {
+        let now = t_ms + k * 100;
+        let t = now as f64 / 1000.0;
+        b.on_odometry_at(&odom_at(wall(t)), ms(now), wall(t))
+            .unwrap();
+        b.tick(ms(now));
+    }
+    let s = b.status(ms(t_ms + 8000));
+    let scan = s.streams["semantic_scan"];
+    assert!(scan.silent);
+    assert_eq!(scan.silences, 1, "one silence, counted once");
+    assert!(scan.last_age_s.unwrap() > 7.9);
+    assert!(!s.streams["odometry"].silent);
+
+    // ... and come back.
+    b.on_semantic_scan(&stamped(11.0), ms(t_ms + 8100)).unwrap();
+    let scan = b.status(ms(t_ms + 8100)).streams["semantic_scan"];
+    assert!(!scan.silent);
+    assert_eq!(scan.silences, 1);
+    // The JSON status carries it.
+    let json = serde_json::to_value(b.status(ms(t_ms + 8100))).unwrap();
+    assert_eq!(json["streams"]["semantic_scan"]["silences"], 1);
+}
+
 /// Drives the bridge in the room: returns the outputs of every tick.
 fn run(b: &mut Bridge, from: u64, to: u64, pose: (f64, f64, f64)) -> Vec<Outgoing> {
     run_in(b, &room(), from, to, pose)
