@@ -10,7 +10,7 @@
 
 use std::collections::{BTreeSet, HashSet};
 use std::fs::{File, OpenOptions};
-use std::io::{BufRead, BufReader, Write};
+use std::io::{BufRead, BufReader, Read, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{Arc, Mutex};
@@ -30,6 +30,7 @@ use sornav_platform_sim::{
 };
 
 use crate::adapter::{AdapterConfig, ConfigFactory, EpisodeTrace, SornavPolicy};
+use crate::figures::FigureError;
 use crate::output::{self, OutputError};
 use crate::record::EpisodeRecord;
 use crate::report::{self, ReportError};
@@ -496,6 +497,49 @@ fn is_legacy_record(line: &str) -> bool {
             || !m.contains_key("floors_between"))
 }
 
+/// Longest line accepted in `episodes.jsonl`: a record is a few KB (an
+/// LLM reason is capped), so a longer line is not a record, and reading
+/// it whole (a file of zeros, a device) would exhaust memory.
+pub const MAX_RECORD_LINE_BYTES: usize = 16 << 20;
+
+enum RecordLineError {
+    Io(std::io::Error),
+    /// Line `line` (1-based) exceeds [`MAX_RECORD_LINE_BYTES`].
+    TooLong {
+        line: usize,
+    },
+}
+
+/// The lines of `reader` (without their line ends), each at most
+/// [`MAX_RECORD_LINE_BYTES`] long.
+fn record_lines(mut reader: impl BufRead) -> Result<Vec<String>, RecordLineError> {
+    let mut lines = Vec::new();
+    loop {
+        let mut buf = Vec::new();
+        let n = (&mut reader)
+            .take(MAX_RECORD_LINE_BYTES as u64 + 1)
+            .read_until(b'\n', &mut buf)
+            .map_err(RecordLineError::Io)?;
+        if n == 0 {
+            return Ok(lines);
+        }
+        if buf.last() == Some(&b'\n') {
+            buf.pop();
+            if buf.last() == Some(&b'\r') {
+                buf.pop();
+            }
+        } else if n > MAX_RECORD_LINE_BYTES {
+            return Err(RecordLineError::TooLong {
+                line: lines.len() + 1,
+            });
+        }
+        let line = String::from_utf8(buf).map_err(|e| {
+            RecordLineError::Io(std::io::Error::new(std::io::ErrorKind::InvalidData, e))
+        })?;
+        lines.push(line);
+    }
+}
+
 /// Reads `episodes.jsonl` (missing file: no records).
 ///
 /// Records written before floors were recorded (with a `cross_floor`
@@ -514,10 +558,16 @@ pub fn read_records(path: &Path) -> Result<Vec<EpisodeRecord>, HarnessError> {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
         Err(e) => return Err(io_err(path, e)),
     };
-    let lines: Vec<String> = BufReader::new(file)
-        .lines()
-        .collect::<Result<_, _>>()
-        .map_err(|e| io_err(path, e))?;
+    let lines = record_lines(BufReader::new(file)).map_err(|e| match e {
+        RecordLineError::Io(e) => io_err(path, e),
+        RecordLineError::TooLong { line } => HarnessError::Malformed {
+            path: path.to_path_buf(),
+            line,
+            message: format!(
+                "a line longer than {MAX_RECORD_LINE_BYTES} bytes (not a record file?)"
+            ),
+        },
+    })?;
     let mut out = Vec::with_capacity(lines.len());
     let last = lines.len();
     for (i, line) in lines.iter().enumerate() {
@@ -958,6 +1008,15 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
     let write_error: Mutex<Option<HarnessError>> = Mutex::new(None);
     // Set at the first write error: nothing more is started.
     let write_failed = AtomicBool::new(false);
+    // A record or figure that cannot be written (a full disk): keep the
+    // first error and start nothing more.
+    let fail_write = |e: HarnessError| {
+        write_failed.store(true, Ordering::Relaxed);
+        write_error
+            .lock()
+            .unwrap_or_else(std::sync::PoisonError::into_inner)
+            .get_or_insert(e);
+    };
     let stop_requested = || {
         options
             .stop
@@ -1042,8 +1101,16 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
                     ),
                 ];
                 for (_, path, size) in targets.iter().filter(|t| t.0) {
-                    if let Err(e) = output::replace_with(path, |tmp| map.save_png(tmp, *size)) {
-                        tracing::warn!("map {}: {e}", path.display());
+                    match output::replace_with(path, |tmp| map.save_png(tmp, *size)) {
+                        Ok(()) => {}
+                        // Nothing to draw: this episode has no map.
+                        Err(e @ FigureError::Empty(_)) => {
+                            tracing::warn!("map {}: {e}", path.display());
+                        }
+                        // The file could not be written (a full disk):
+                        // a write failure like a record's, which stops
+                        // the run.
+                        Err(e) => fail_write(io_err(path, e)),
                     }
                 }
             }
@@ -1058,11 +1125,7 @@ pub fn run(config: &EvalConfig, options: &RunOptions) -> Result<RunOutcome, Harn
             });
             drop(guard);
             if let Err(e) = written {
-                write_failed.store(true, Ordering::Relaxed);
-                let mut slot = write_error
-                    .lock()
-                    .unwrap_or_else(std::sync::PoisonError::into_inner);
-                slot.get_or_insert(e);
+                fail_write(e);
             }
             let s = successes.fetch_add(usize::from(record.result.success), Ordering::Relaxed)
                 + usize::from(record.result.success);

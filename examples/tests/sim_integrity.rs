@@ -245,3 +245,126 @@ fn cli_exit_codes_for_empty_and_interrupted_runs() {
     assert!(recorded.len() < 6, "{} recorded", recorded.len());
     let _ = std::fs::remove_dir_all(dir);
 }
+
+/// A records file that is not one (a device of zeros, a binary file) is a
+/// typed error after at most `MAX_RECORD_LINE_BYTES` per line, not a read
+/// that exhausts memory (`episodes.jsonl` pointing at `/dev/zero` or
+/// `/dev/full` read without end).
+#[test]
+fn a_records_file_without_line_ends_is_refused_not_read_whole() {
+    let dir = common::temp_dir("integrity", "zeros");
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("episodes.jsonl");
+    std::fs::write(&path, vec![0u8; harness::MAX_RECORD_LINE_BYTES + 10]).unwrap();
+    match harness::read_records(&path) {
+        Err(HarnessError::Malformed {
+            line: 1, message, ..
+        }) => {
+            assert!(message.contains("longer than"), "{message}");
+        }
+        other => panic!("expected Malformed, got {other:?}"),
+    }
+    if std::path::Path::new("/dev/zero").exists() {
+        let link = dir.join("zero.jsonl");
+        std::os::unix::fs::symlink("/dev/zero", &link).unwrap();
+        assert!(matches!(
+            harness::read_records(&link),
+            Err(HarnessError::Malformed { line: 1, .. })
+        ));
+    }
+    // CRLF line ends are line ends; an empty file has no records.
+    std::fs::write(&path, "\r\n\r\n").unwrap();
+    assert!(harness::read_records(&path).unwrap().is_empty());
+    let _ = std::fs::remove_dir_all(dir);
+}
+
+/// Issue 21, disk full, end to end: `sornav-sim` writing to a file system
+/// that fills up (a 160 KiB tmpfs mounted in a private mount namespace)
+/// stops at the first write that fails instead of running every remaining
+/// episode, exits non-zero naming the file and the cause, and leaves no
+/// partial (0-byte) figure or temporary file behind. Skipped (failing when
+/// `CI` is true) where mount namespaces are not available.
+#[test]
+fn a_full_disk_stops_the_run_at_the_first_failed_write() {
+    let dir = common::temp_dir("integrity", "full");
+    std::fs::create_dir_all(&dir).unwrap();
+    let probe = std::process::Command::new("unshare")
+        .args(["--mount", "sh", "-c"])
+        .arg(r#"mount -t tmpfs -o size=16k tmpfs "$0""#)
+        .arg(&dir)
+        .output();
+    if !probe.as_ref().is_ok_and(|o| o.status.success()) {
+        assert!(
+            std::env::var("CI").as_deref() != Ok("true"),
+            "cannot mount a tmpfs in a private mount namespace: {probe:?} (CI=true: failing, not skipping)"
+        );
+        eprintln!("SKIPPED: cannot mount a tmpfs in a private mount namespace: {probe:?}");
+        return;
+    }
+    let exe = env!("CARGO_BIN_EXE_sornav-sim");
+    // Inside the namespace: a small tmpfs on `dir`, the run into it, then
+    // a listing of what it left (name and size of every file), since the
+    // tmpfs disappears with the namespace.
+    let script = r#"
+        mount -t tmpfs -o size=160k tmpfs "$1" || exit 90
+        "$0" --scenes procedural:1 --episodes-per-scene 12 --variants oracle \
+            --width 64 --height 48 --jobs 1 --maps 12 --quiet --out "$1"
+        code=$?
+        echo "exit=$code"
+        find "$1" -type f -printf 'file %s %P\n'
+        [ -f "$1/episodes.jsonl" ] && sed 's/^/record /' "$1/episodes.jsonl" | cut -c1-40
+    "#;
+    let began = std::time::Instant::now();
+    let out = std::process::Command::new("unshare")
+        .args(["--mount", "sh", "-c", script])
+        .arg(exe)
+        .arg(&dir)
+        .output()
+        .unwrap();
+    let elapsed = began.elapsed();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let code = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("exit="))
+        .unwrap_or_else(|| panic!("no exit code:\n{stdout}\n{stderr}"));
+    assert_ne!(code, "0", "exit 0 on a full disk:\n{stdout}\n{stderr}");
+    assert!(stderr.contains("No space left on device"), "{stderr}");
+    let files: Vec<(u64, &str)> = stdout
+        .lines()
+        .filter_map(|l| l.strip_prefix("file "))
+        .filter_map(|l| l.split_once(' '))
+        .map(|(size, name)| (size.parse().unwrap(), name))
+        .collect();
+    let records = files
+        .iter()
+        .find(|(_, n)| *n == "episodes.jsonl")
+        .map_or(0, |(size, _)| *size);
+    for (size, name) in &files {
+        let base = name.rsplit('/').next().unwrap();
+        assert!(
+            !base.starts_with('.') || base == ".sornav-sim.lock",
+            "temporary file {name} left:\n{stdout}"
+        );
+        if name.ends_with(".png") {
+            assert!(*size > 0, "0-byte figure {name}:\n{stdout}");
+        }
+    }
+    let figures = files.iter().filter(|(_, n)| n.ends_with(".png")).count();
+    assert!(
+        figures < 12,
+        "every figure written: the disk never filled up?\n{stdout}"
+    );
+    // Stopped at the first failed write: every recorded episode but the
+    // one whose write failed has its figure (a figure is written before
+    // its record), so the run did not go on without figures.
+    let recorded = stdout.lines().filter(|l| l.starts_with("record ")).count();
+    assert!(
+        recorded <= figures + 1,
+        "{recorded} records but {figures} figures: the run went on after a failed write:\n{stdout}\n{stderr}"
+    );
+    eprintln!(
+        "stopped after {elapsed:?}: {figures} figure(s), {records} bytes of records\n{stderr}"
+    );
+    let _ = std::fs::remove_dir_all(dir);
+}
