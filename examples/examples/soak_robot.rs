@@ -268,7 +268,7 @@ fn main() -> Result<(), String> {
             rss.push((r, s));
             let st = last.as_ref();
             let missing: u64 =
-                st.map_or(0, |s| s.streams.values().map(|v| v.missing_estimate).sum());
+                st.map_or(0, |s| s.streams.values().map(|v| v.lost).sum());
             writeln!(
                 csv,
                 "{:.0},{r},{s},{requests},{confirmed},{},{},{},{},{missing}",
@@ -320,7 +320,7 @@ fn main() -> Result<(), String> {
             "observations": st.and_then(|s| s.agent.as_ref()).map(|a| a.observations),
             "rejected_messages": st.map(|s| s.bridge.rejected_messages),
             "rejections": st.map(|s| s.rejections.clone()),
-            "missing_samples": st.map(|s| s.streams.values().map(|v| v.missing_estimate).sum::<u64>()),
+            "missing_samples": st.map(|s| s.streams.values().map(|v| v.lost).sum::<u64>()),
             "silences": st.map(|s| s.streams.values().map(|v| v.silences).sum::<u64>()),
             "robot_exit_ok": exit.status.success(),
             "csv": args.csv,

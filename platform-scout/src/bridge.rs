@@ -63,7 +63,7 @@ use crate::msg::{
     PoseStamped, Quaternion, RosString, Time, Twist, TwistStamped, Vector3,
 };
 use crate::pointcloud::{CloudError, CloudView};
-use crate::streams::{Silence, StreamMonitor, StreamStatus};
+use crate::streams::{SampleSource, Silence, StreamMonitor, StreamStatus};
 
 /// A message the node should publish.
 #[derive(Debug, Clone, PartialEq)]
@@ -321,10 +321,10 @@ pub struct Status {
     #[serde(default)]
     pub stairs: Vec<[f64; 3]>,
     /// Health of each input stream by topic (`odometry`, `semantic_scan`,
-    /// `registered_scan`, `terrain_map`): samples received, gaps and the
-    /// estimated samples missing in them, silences ([`crate::streams`]).
-    /// Samples lost before decoding are reported only here: DDS does not
-    /// report them.
+    /// `registered_scan`, `terrain_map`), from [`Bridge::on_delivery`]:
+    /// samples received, samples lost before decoding (gaps in the
+    /// writers' sequence numbers), silences ([`crate::streams`]). DDS does
+    /// not report such losses; they show only here.
     #[serde(default)]
     pub streams: BTreeMap<String, StreamStatus>,
     /// A sentence for operators about the outcome (in `floor_exhausted`:
@@ -579,15 +579,21 @@ impl Bridge {
         }
     }
 
-    /// A sample of `topic` arrived at `now` with header stamp `stamp`:
-    /// gaps in the stream (samples lost before decoding, which DDS does not
-    /// report) are counted and logged at warn, rate-limited per topic; see
-    /// [`crate::streams`].
-    fn note_sample(&mut self, topic: &'static str, stamp: Time, now: Duration) {
+    /// A sample of `topic` was taken from DDS at `now`, from `source` (its
+    /// writer and sequence number; `None` when unknown). Call it for every
+    /// sample taken, before the message handler ([`crate::node`] does):
+    /// samples lost before decoding, which DDS does not report, are
+    /// counted from gaps in each writer's numbering and logged at warn
+    /// (rate-limited per topic), and silent streams are detected; see
+    /// [`crate::streams`] and [`Status::streams`].
+    pub fn on_delivery(
+        &mut self,
+        topic: &'static str,
+        source: Option<SampleSource>,
+        now: Duration,
+    ) {
         let stream = self.streams.entry(topic).or_default();
-        let stamp_s = (stamp != Time::default())
-            .then(|| f64::from(stamp.sec) + f64::from(stamp.nanosec) / 1e9);
-        let (gap, silence) = stream.monitor.on_sample(stamp_s, now);
+        let (gap, silence) = stream.monitor.on_sample(source, now);
         if let Some(Silence::Ended { lasted_s }) = silence {
             tracing::info!(
                 topic,
@@ -595,18 +601,18 @@ impl Bridge {
             );
         }
         if let Some(gap) = gap {
-            let total = stream.monitor.status(now).missing_estimate;
-            if let Some(not_logged) = stream.warn.allow(now) {
+            let total = stream.monitor.status(now).lost;
+            if let Some(gaps_not_logged) = stream.warn.allow(now) {
                 tracing::warn!(
                     topic,
-                    total_missing = total,
-                    gaps_not_logged = not_logged,
-                    "{topic}: about {} sample(s) missing ({:.2} s between stamps, period {:.3} s): \
-                     lost before decoding (DDS does not report it; large clouds on a \
-                     best-effort reader lose fragments)",
+                    total_lost = total,
+                    gaps_not_logged,
+                    "{topic}: {} sample(s) lost before decoding (writer's sequence {} -> {}); \
+                     DDS does not report it: large clouds on a best-effort reader lose \
+                     fragments, or the reader's history overflowed",
                     gap.missing,
-                    gap.interval_s,
-                    gap.period_s
+                    gap.after,
+                    gap.next
                 );
             }
         }
@@ -681,7 +687,6 @@ impl Bridge {
         now: Duration,
         received: Time,
     ) -> Result<(), BridgeError> {
-        self.note_sample("odometry", msg.header.stamp, now);
         self.check_frame("odometry", &msg.header, now)?;
         let age_s = stamp_difference_s(received, msg.header.stamp);
         let rates = self.config.rates;
@@ -821,7 +826,6 @@ impl Bridge {
         now: Duration,
         decode: impl FnOnce(&CloudView<'_>) -> Result<T, CloudError>,
     ) -> Result<T, BridgeError> {
-        self.note_sample(topic, msg.header.stamp, now);
         self.check_frame(topic, &msg.header, now)?;
         if self.odom.is_none() {
             self.stats.clouds_before_odometry += 1;

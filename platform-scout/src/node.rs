@@ -23,6 +23,7 @@ use crate::msg::{
     Int8, Joy, MarkerArray, Odometry, Path, PointCloud2, PointStamped, RosMessage, RosString,
     Twist, TwistStamped,
 };
+use crate::streams::SampleSource;
 
 /// Errors of the DDS layer.
 #[derive(Debug, thiserror::Error)]
@@ -159,16 +160,59 @@ pub fn subscription<M: RosMessage>(
 /// that does not decode) are skipped and returned, as messages, in the
 /// second value.
 pub fn drain<M: RosMessage>(sub: &Subscription<M>, max: usize) -> (Vec<M>, Vec<String>) {
+    let (samples, errors) = drain_with_source(sub, max);
+    (samples.into_iter().map(|(m, _)| m).collect(), errors)
+}
+
+/// [`drain`], with each sample's [`SampleSource`]: its writer's GUID and
+/// its sequence number from that writer (for [`Bridge::on_delivery`]).
+pub fn drain_with_source<M: RosMessage>(
+    sub: &Subscription<M>,
+    max: usize,
+) -> (Vec<(M, SampleSource)>, Vec<String>) {
     let mut out = Vec::new();
     let mut errors = Vec::new();
     for _ in 0..max {
         match sub.take() {
-            Ok(Some((m, _))) => out.push(m),
+            Ok(Some((m, info))) => {
+                let mut writer = [0u8; 16];
+                let gid = info.publisher_gid();
+                let bytes = gid.as_bytes();
+                let n = bytes.len().min(16);
+                writer[..n].copy_from_slice(&bytes[..n]);
+                let source = SampleSource {
+                    writer,
+                    sequence: info.sequence_number(),
+                };
+                out.push((m, source));
+            }
             Ok(None) => break,
             Err(e) => errors.push(e.to_string()),
         }
     }
     (out, errors)
+}
+
+/// Takes the samples of a sensor stream available now (at most `max`):
+/// each one's delivery goes to [`Bridge::on_delivery`] (loss and silence
+/// accounting), then the message to `handle`; samples that fail to decode
+/// go to [`Bridge::on_undecodable`].
+fn feed<M: RosMessage>(
+    bridge: &mut Bridge,
+    sub: &Subscription<M>,
+    topic: &'static str,
+    max: usize,
+    now: Duration,
+    handle: impl Fn(&mut Bridge, &M, Duration),
+) {
+    let (samples, errors) = drain_with_source(sub, max);
+    for e in &errors {
+        bridge.on_undecodable(topic, e, now);
+    }
+    for (m, source) in &samples {
+        bridge.on_delivery(topic, Some(*source), now);
+        handle(bridge, m, now);
+    }
 }
 
 /// The newest sample available now, discarding older ones.
@@ -294,26 +338,26 @@ impl RobotNode {
     pub fn spin_once(&mut self) {
         let now = self.now();
         let mut out = Vec::new();
-        let (odoms, e1) = drain(&self.odometry, 1000);
-        self.undecodable("odometry", &e1, now);
-        for m in &odoms {
-            let _ = self.bridge.on_odometry(m, now);
-        }
-        let (clouds, e2) = drain(&self.semantic, 100);
-        self.undecodable("semantic_scan", &e2, now);
-        for m in &clouds {
-            let _ = self.bridge.on_semantic_scan(m, now);
-        }
-        let (clouds, e3) = drain(&self.registered, 100);
-        self.undecodable("registered_scan", &e3, now);
-        for m in &clouds {
-            let _ = self.bridge.on_registered_scan(m, now);
-        }
-        let (clouds, e4) = drain(&self.terrain, 100);
-        self.undecodable("terrain_map", &e4, now);
-        for m in &clouds {
-            let _ = self.bridge.on_terrain_map(m, now);
-        }
+        let b = &mut self.bridge;
+        feed(b, &self.odometry, "odometry", 1000, now, |b, m, now| {
+            let _ = b.on_odometry(m, now);
+        });
+        feed(b, &self.semantic, "semantic_scan", 100, now, |b, m, now| {
+            let _ = b.on_semantic_scan(m, now);
+        });
+        feed(
+            b,
+            &self.registered,
+            "registered_scan",
+            100,
+            now,
+            |b, m, now| {
+                let _ = b.on_registered_scan(m, now);
+            },
+        );
+        feed(b, &self.terrain, "terrain_map", 100, now, |b, m, now| {
+            let _ = b.on_terrain_map(m, now);
+        });
         let (targets, e5) = drain(&self.target, 100);
         self.undecodable("target", &e5, now);
         for m in &targets {

@@ -3,55 +3,68 @@
 //! DDS does not always say when it loses a sample. RustDDS (0.15) drops a
 //! fragmented sample it cannot reassemble (for example a point cloud of
 //! more than about 10 MB on a best-effort reader, whose fragments overflow
-//! the socket buffer on loopback) without any status event, and a reader
-//! that is not matched, or a publisher that stalls, looks the same: nothing
-//! arrives. So the bridge watches every sensor stream itself:
+//! the socket buffer on loopback) without any status event, a best-effort
+//! reader loses whatever the network drops, and a reader's history
+//! (`KEEP_LAST`) overwrites samples not taken in time. So the node watches
+//! every input stream itself:
 //!
-//! * **Gaps.** A [`StreamMonitor`] keeps the last [`PERIOD_WINDOW`]
-//!   intervals between consecutive samples (header stamps; the arrival time
-//!   for unstamped messages) and takes their median as the stream's period.
-//!   An interval longer than [`GAP_FACTOR`] periods is a gap of
-//!   `round(interval / period) - 1` missing samples. The count is an
-//!   *estimate*: exact for a periodic publisher while the stamps' jitter
-//!   and the period estimate's error, summed over the gap, stay under half
-//!   a period (property-tested against the dropped set with 2 % jitter and
-//!   up to 5 samples lost in a row); rough for a publisher without a
-//!   steady rate.
+//! * **Lost samples**, exactly: every DDS writer numbers its samples
+//!   1, 2, 3, ... (the RTPS sequence number, carried to the reader with the
+//!   writer's GUID). A [`StreamMonitor`] remembers the last number taken
+//!   from each writer; a jump from `a` to `b > a + 1` is a gap of `b - a -
+//!   1` samples that never reached the node, whatever lost them. A sample
+//!   that arrived but failed to decode also leaves a gap (it is counted
+//!   separately as undecodable as well). Timing plays no part, so a
+//!   publisher that is late or irregular never counts as a loss.
 //! * **Silence.** A stream that delivered samples and then nothing for
-//!   `max(SILENCE_MIN, SILENCE_PERIODS x period)` is *silent*: counted once
-//!   per silence and logged at warn, and logged again when it resumes. Every
-//!   sample of a stream vanishing (each cloud above the reassembly limit)
-//!   shows up here.
+//!   `max(SILENCE_MIN, SILENCE_PERIODS x period)` is *silent* (the period is
+//!   the median of the last [`PERIOD_WINDOW`] intervals between arrivals):
+//!   counted once per silence and logged at warn, and logged again when it
+//!   resumes. When *every* sample of a stream is lost (each cloud above the
+//!   reassembly limit), nothing arrives to number: this is how it shows.
 //!
 //! The counts are in the status document ([`crate::bridge::Status::streams`]).
-//! Complexity: `O(PERIOD_WINDOW log PERIOD_WINDOW)` per sample (the median
-//! of a small window), `O(1)` per silence check.
+//! Complexity: `O(log W + PERIOD_WINDOW)` per sample for `W` writers seen
+//! (at most [`MAX_WRITERS`]), `O(PERIOD_WINDOW log PERIOD_WINDOW)` per
+//! silence check.
 
-use std::collections::VecDeque;
+use std::collections::{BTreeMap, VecDeque};
 use std::time::Duration;
 
 use serde::{Deserialize, Serialize};
 
-/// Intervals kept for the period estimate.
+/// Arrival intervals kept for the period estimate.
 pub const PERIOD_WINDOW: usize = 16;
-/// Intervals needed before gaps are counted.
+/// Intervals needed before the period is known.
 pub const MIN_INTERVALS: usize = 4;
-/// An interval of more than this many periods is a gap.
-pub const GAP_FACTOR: f64 = 1.8;
 /// A stream is silent after at least this long without a sample.
 pub const SILENCE_MIN: Duration = Duration::from_secs(5);
 /// ... and at least this many periods.
 pub const SILENCE_PERIODS: f64 = 10.0;
+/// Writers remembered per stream; when more appear (writers restarting
+/// again and again), the oldest entries are forgotten (their next sample
+/// starts a new chain and counts nothing).
+pub const MAX_WRITERS: usize = 64;
 
-/// Samples missing between two consecutive samples of a stream.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// Where a sample came from: its DDS writer and its number from that
+/// writer (RTPS sequence number, 1 for the first sample).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct SampleSource {
+    /// The writer's GUID.
+    pub writer: [u8; 16],
+    /// The sample's sequence number from that writer.
+    pub sequence: i64,
+}
+
+/// Samples missing between two consecutive samples of one writer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Gap {
-    /// Estimated samples missing.
+    /// Samples that never arrived.
     pub missing: u64,
-    /// The interval between the two samples (s).
-    pub interval_s: f64,
-    /// The stream's period when the gap was seen (s).
-    pub period_s: f64,
+    /// The sequence number taken before the gap.
+    pub after: i64,
+    /// The sequence number that ended it.
+    pub next: i64,
 }
 
 /// What happened to a stream's silence at a check.
@@ -75,26 +88,29 @@ pub enum Silence {
 pub struct StreamStatus {
     /// Samples that arrived (decoded, whether used or rejected afterwards).
     pub received: u64,
-    /// Gaps seen (intervals of more than [`GAP_FACTOR`] periods).
+    /// Gaps in the writers' sequence numbers.
     pub gaps: u64,
-    /// Estimated samples missing in those gaps.
-    pub missing_estimate: u64,
+    /// Samples lost in those gaps (sent by a writer, never taken here).
+    pub lost: u64,
     /// Times the stream fell silent.
     pub silences: u64,
     /// Whether it is silent now.
     pub silent: bool,
-    /// The period estimate (s), once [`MIN_INTERVALS`] intervals are known.
+    /// The period estimate between arrivals (s), once [`MIN_INTERVALS`]
+    /// intervals are known.
     pub period_s: Option<f64>,
     /// Seconds since the last sample (node clock).
     pub last_age_s: Option<f64>,
 }
 
-/// Watches one stream's sample times; see the [module docs](self).
+/// Watches one stream; see the [module docs](self).
 #[derive(Debug, Clone, Default)]
 pub struct StreamMonitor {
     intervals: VecDeque<f64>,
-    last_time: Option<f64>,
     last_arrival: Option<Duration>,
+    /// Last sequence number taken per writer, with the arrival count when
+    /// it was last seen (to forget the oldest writer first).
+    writers: BTreeMap<[u8; 16], (i64, u64)>,
     status: StreamStatus,
 }
 
@@ -104,8 +120,8 @@ impl StreamMonitor {
         Self::default()
     }
 
-    /// The period estimate (s): the median of the last intervals, once
-    /// [`MIN_INTERVALS`] are known.
+    /// The period estimate between arrivals (s): the median of the last
+    /// intervals, once [`MIN_INTERVALS`] are known.
     pub fn period_s(&self) -> Option<f64> {
         if self.intervals.len() < MIN_INTERVALS {
             return None;
@@ -115,21 +131,17 @@ impl StreamMonitor {
         Some(v[v.len() / 2])
     }
 
-    /// A sample arrived at `now` (node clock) with header time `stamp_s`
-    /// (seconds; `None` or non-finite for an unstamped message, which uses
-    /// the arrival time). Returns the gap before it, if any, and whether
-    /// it ended a silence.
+    /// A sample arrived at `now` (node clock) from `source` (`None` when
+    /// the transport does not say). Returns the gap in its writer's
+    /// numbering before it, if any, and whether it ended a silence.
     ///
-    /// A time that does not increase (a restarted publisher, reordering)
-    /// restarts the interval chain without counting anything.
+    /// A number that does not increase (a duplicate, reordering) counts
+    /// nothing and restarts that writer's chain.
     pub fn on_sample(
         &mut self,
-        stamp_s: Option<f64>,
+        source: Option<SampleSource>,
         now: Duration,
     ) -> (Option<Gap>, Option<Silence>) {
-        let t = stamp_s
-            .filter(|s| s.is_finite())
-            .unwrap_or(now.as_secs_f64());
         let ended = if self.status.silent {
             self.status.silent = false;
             self.last_arrival.map(|a| Silence::Ended {
@@ -139,33 +151,46 @@ impl StreamMonitor {
             None
         };
         self.status.received += 1;
+        if let Some(dt) = self
+            .last_arrival
+            .map(|a| now.saturating_sub(a).as_secs_f64())
+            .filter(|dt| *dt > 0.0)
+        {
+            if self.intervals.len() == PERIOD_WINDOW {
+                self.intervals.pop_front();
+            }
+            self.intervals.push_back(dt);
+        }
         self.last_arrival = Some(now);
-        let previous = self.last_time.replace(t);
-        let Some(dt) = previous
-            .map(|p| t - p)
-            .filter(|dt| *dt > 0.0 && dt.is_finite())
-        else {
+        let Some(source) = source else {
             return (None, ended);
         };
-        if let Some(period) = self.period_s().filter(|p| *p > 0.0)
-            && dt > GAP_FACTOR * period
+        let arrival = self.status.received;
+        let previous = self
+            .writers
+            .insert(source.writer, (source.sequence, arrival))
+            .map(|(seq, _)| seq);
+        if self.writers.len() > MAX_WRITERS
+            && let Some(oldest) = self
+                .writers
+                .iter()
+                .min_by_key(|(_, (_, seen))| *seen)
+                .map(|(w, _)| *w)
         {
-            // Saturating float-to-int cast: a huge jump counts u64::MAX.
-            let missing = ((dt / period).round() as u64).saturating_sub(1).max(1);
+            self.writers.remove(&oldest);
+        }
+        let gap = previous
+            .filter(|after| source.sequence > after.saturating_add(1))
+            .map(|after| Gap {
+                missing: source.sequence.abs_diff(after) - 1,
+                after,
+                next: source.sequence,
+            });
+        if let Some(g) = gap {
             self.status.gaps += 1;
-            self.status.missing_estimate = self.status.missing_estimate.saturating_add(missing);
-            let gap = Gap {
-                missing,
-                interval_s: dt,
-                period_s: period,
-            };
-            return (Some(gap), ended);
+            self.status.lost = self.status.lost.saturating_add(g.missing);
         }
-        if self.intervals.len() == PERIOD_WINDOW {
-            self.intervals.pop_front();
-        }
-        self.intervals.push_back(dt);
-        (None, ended)
+        (gap, ended)
     }
 
     /// Checks for silence at `now`: returns [`Silence::Began`] once when a
@@ -210,20 +235,37 @@ mod tests {
         Duration::from_secs_f64(s)
     }
 
+    fn from(writer: u8, sequence: i64) -> Option<SampleSource> {
+        Some(SampleSource {
+            writer: [writer; 16],
+            sequence,
+        })
+    }
+
     #[test]
-    fn a_regular_stream_has_no_gaps_and_one_dropped_sample_is_one_missing() {
+    fn a_jump_in_a_writers_numbers_is_a_gap_whatever_the_timing() {
         let mut m = StreamMonitor::new();
-        for i in 0..10 {
-            let t = 100.0 + 0.1 * f64::from(i);
-            assert_eq!(m.on_sample(Some(t), at(t)).0, None);
+        for seq in 1..=10 {
+            // irregular arrivals: never a loss by themselves
+            let t = f64::from(seq as u32).powf(1.5);
+            assert_eq!(m.on_sample(from(1, seq), at(t)).0, None);
         }
-        // Sample 10 dropped.
-        let (gap, _) = m.on_sample(Some(101.1), at(101.1));
-        let gap = gap.expect("a gap");
-        assert_eq!(gap.missing, 1);
-        approx::assert_relative_eq!(gap.period_s, 0.1, epsilon = 1e-9);
-        let s = m.status(at(101.1));
-        assert_eq!((s.received, s.gaps, s.missing_estimate), (11, 1, 1));
+        let (gap, _) = m.on_sample(from(1, 13), at(40.0));
+        assert_eq!(
+            gap,
+            Some(Gap {
+                missing: 2,
+                after: 10,
+                next: 13
+            })
+        );
+        // another writer on the same topic has its own numbering
+        assert_eq!(m.on_sample(from(2, 1), at(41.0)).0, None);
+        assert_eq!(m.on_sample(from(2, 2), at(42.0)).0, None);
+        // a duplicate or a reordered sample counts nothing
+        assert_eq!(m.on_sample(from(1, 12), at(43.0)).0, None);
+        let s = m.status(at(43.0));
+        assert_eq!((s.received, s.gaps, s.lost), (14, 1, 2));
     }
 
     #[test]
@@ -231,8 +273,7 @@ mod tests {
         let mut m = StreamMonitor::new();
         assert_eq!(m.check_silence(at(100.0)), None, "nothing seen yet");
         for i in 0..6 {
-            let t = f64::from(i) * 0.1;
-            m.on_sample(None, at(t));
+            m.on_sample(None, at(f64::from(i) * 0.1));
         }
         assert_eq!(m.check_silence(at(4.0)), None);
         assert!(matches!(
@@ -251,75 +292,84 @@ mod tests {
     }
 
     #[test]
-    fn stamps_that_go_back_restart_the_chain_without_counting() {
+    fn a_slow_stream_is_silent_only_after_ten_periods() {
         let mut m = StreamMonitor::new();
         for i in 0..8 {
-            m.on_sample(Some(50.0 + f64::from(i)), at(f64::from(i)));
+            m.on_sample(None, at(f64::from(i) * 2.0));
         }
-        // Publisher restarted: stamps from an earlier clock.
-        assert_eq!(m.on_sample(Some(10.0), at(8.0)).0, None);
-        assert_eq!(m.on_sample(Some(11.0), at(9.0)).0, None);
-        assert_eq!(m.status(at(9.0)).missing_estimate, 0);
+        assert_eq!(m.status(at(14.0)).period_s, Some(2.0));
+        assert_eq!(m.check_silence(at(14.0 + 19.0)), None);
+        assert!(m.check_silence(at(14.0 + 20.5)).is_some());
     }
 
     #[test]
-    fn non_finite_stamps_use_the_arrival_time() {
+    fn the_oldest_writer_is_forgotten_beyond_the_cap() {
         let mut m = StreamMonitor::new();
-        for i in 0..6 {
-            let t = f64::from(i);
-            let stamp = if i % 2 == 0 { f64::NAN } else { f64::INFINITY };
-            m.on_sample(Some(stamp), at(t));
+        for w in 0..=MAX_WRITERS as u8 {
+            m.on_sample(from(w, 1), at(f64::from(w)));
         }
-        let p = m.period_s().expect("period");
-        approx::assert_relative_eq!(p, 1.0, epsilon = 1e-9);
+        // writer 0 was forgotten: its next sample starts a new chain
+        assert_eq!(m.on_sample(from(0, 5), at(100.0)).0, None);
+        // ... which pushed out writer 1, the oldest then; the newest is
+        // remembered
+        assert_eq!(m.on_sample(from(1, 5), at(101.0)).0, None);
+        assert!(
+            m.on_sample(from(MAX_WRITERS as u8, 5), at(102.0))
+                .0
+                .is_some()
+        );
     }
 
     proptest! {
-        /// Differential test against the dropped set itself: a periodic
-        /// publisher (period p, stamps jittered by up to 2 % of p) whose
-        /// first samples arrive and up to 5 in a row of the later ones are
-        /// dropped; the estimate equals the number of dropped samples
-        /// between the first and the last received one (drops after the
-        /// last sample are silence, not gaps).
+        /// Differential test against the dropped set itself: up to three
+        /// writers interleaved on one topic, each numbering its samples
+        /// 1, 2, 3, ...; some samples are dropped. The monitor's `lost`
+        /// equals the number of dropped samples between each writer's
+        /// first and last delivered one (the ones after the last are
+        /// silence, not gaps), whatever the arrival times.
         #[test]
-        fn missing_estimate_counts_the_dropped_samples(
-            period in 0.01f64..2.0,
-            jitter in proptest::collection::vec(-0.02f64..0.02, 20..200),
-            drops in proptest::collection::vec(0.0f64..1.0, 20..200),
-            rate in 0.0f64..0.5,
+        fn lost_counts_exactly_the_dropped_samples(
+            sends in proptest::collection::vec((0u8..3, any::<bool>(), 0u64..2000), 1..300),
         ) {
-            let n = jitter.len().min(drops.len());
-            let keep: Vec<bool> = (0..n)
-                .map(|i| i < MIN_INTERVALS + 2 || i % 6 == 5 || drops[i] >= rate)
-                .collect();
             let mut m = StreamMonitor::new();
-            for i in (0..n).filter(|&i| keep[i]) {
-                let t = 1000.0 + (i as f64 + jitter[i]) * period;
-                m.on_sample(Some(t), at(i as f64));
+            let mut next = [0i64; 3];
+            let mut delivered: [Vec<i64>; 3] = Default::default();
+            let mut now = 0u64;
+            for (w, keep, dt) in sends {
+                next[w as usize] += 1;
+                now += dt;
+                if keep {
+                    delivered[w as usize].push(next[w as usize]);
+                    m.on_sample(from(w, next[w as usize]), Duration::from_millis(now));
+                }
             }
-            let last = (0..n).rev().find(|&i| keep[i]).unwrap();
-            let dropped = (0..last).filter(|&i| !keep[i]).count() as u64;
-            let s = m.status(at(n as f64));
-            prop_assert_eq!(s.missing_estimate, dropped);
-            prop_assert_eq!(s.received, keep.iter().filter(|k| **k).count() as u64);
-            prop_assert!(s.gaps <= s.missing_estimate);
+            let expected: u64 = delivered
+                .iter()
+                .filter(|d| !d.is_empty())
+                .map(|d| (d[d.len() - 1] - d[0] + 1) as u64 - d.len() as u64)
+                .sum();
+            let s = m.status(Duration::from_millis(now));
+            prop_assert_eq!(s.lost, expected);
+            prop_assert_eq!(s.received, delivered.iter().map(|d| d.len() as u64).sum::<u64>());
+            prop_assert!(s.gaps <= s.lost);
         }
 
-        /// Any times (including NaN, infinities, repeats and jumps back)
+        /// Any sources (extreme numbers, repeats, jumps back) and times
         /// never panic, and the counters stay consistent.
         #[test]
-        fn arbitrary_times_keep_the_counters_consistent(
-            samples in proptest::collection::vec((proptest::option::of(proptest::num::f64::ANY), 0u64..10_000), 0..100),
+        fn arbitrary_samples_keep_the_counters_consistent(
+            samples in proptest::collection::vec(
+                (proptest::option::of((0u8..4, any::<i64>())), 0u64..20_000), 0..100),
         ) {
             let mut m = StreamMonitor::new();
             let mut now = 0u64;
-            for (stamp, dt_ms) in samples {
+            for (source, dt_ms) in samples {
                 now += dt_ms;
-                m.on_sample(stamp, Duration::from_millis(now));
+                m.on_sample(source.and_then(|(w, s)| from(w, s)), Duration::from_millis(now));
                 m.check_silence(Duration::from_millis(now + dt_ms));
             }
             let s = m.status(Duration::from_millis(now));
-            prop_assert!(s.gaps <= s.missing_estimate);
+            prop_assert!(s.gaps <= s.lost);
             prop_assert!(s.period_s.is_none_or(|p| p.is_finite() && p > 0.0));
         }
     }

@@ -12,6 +12,7 @@ use sornav_platform_scout::config::ScoutConfig;
 use sornav_platform_scout::markers::NAMESPACES;
 use sornav_platform_scout::msg::*;
 use sornav_platform_scout::pointcloud::{encode_xyzi, encode_xyzl};
+use sornav_platform_scout::streams::SampleSource;
 
 mod common;
 use common::room;
@@ -455,59 +456,60 @@ fn one_cloud_above_the_cap_is_thinned_not_dropped() {
 
 /// Issue 21: samples lost before decoding (a best-effort reader drops a
 /// cloud whose fragments it cannot reassemble, and RustDDS reports nothing)
-/// are visible in the status: gaps in a stream's stamps are counted as
-/// missing samples, and a stream that stops is reported silent once, then
-/// back when it resumes.
+/// are visible in the status: gaps in a writer's sequence numbers are
+/// counted as lost samples, whatever the timing, and a stream that stops
+/// is reported silent once, then back when it resumes.
 #[test]
 fn lost_and_silent_streams_are_reported_in_the_status() {
     let mut b = Bridge::new(config()).unwrap();
-    let cloud = [[1.0, 0.0, 0.3, 1.0]];
-    let stamped = |s: f64| encode_xyzl(Header::new(wall(s), "map"), &cloud).unwrap();
+    let cloud = semantic(&[[1.0, 0.0, 0.3, 1.0]]);
+    let writer = |w: u8, sequence: i64| {
+        Some(SampleSource {
+            writer: [w; 16],
+            sequence,
+        })
+    };
     let mut t_ms = 0;
-    // 10 Hz clouds; samples 12, 13 and 20 never arrive.
-    for i in 0..30u32 {
-        t_ms = u64::from(i) * 100;
-        let t = f64::from(i) * 0.1;
-        b.on_odometry_at(&odom_at(wall(t)), ms(t_ms), wall(t))
-            .unwrap();
-        if ![12, 13, 20].contains(&i) {
-            b.on_semantic_scan(&stamped(t), ms(t_ms)).unwrap();
+    // Clouds at irregular times; numbers 13, 14 and 21 never arrive.
+    for i in 1..=30i64 {
+        t_ms += if i % 3 == 0 { 250 } else { 60 };
+        b.on_delivery("odometry", writer(1, i), ms(t_ms));
+        b.on_odometry(&odom(0.0, 0.0, 0.0), ms(t_ms)).unwrap();
+        if ![13, 14, 21].contains(&i) {
+            b.on_delivery("semantic_scan", writer(2, i), ms(t_ms));
+            b.on_semantic_scan(&cloud, ms(t_ms)).unwrap();
         }
         b.tick(ms(t_ms));
     }
     let s = b.status(ms(t_ms));
     let scan = s.streams["semantic_scan"];
-    assert_eq!(
-        (scan.received, scan.gaps, scan.missing_estimate),
-        (27, 2, 3)
-    );
-    approx::assert_relative_eq!(scan.period_s.unwrap(), 0.1, epsilon = 1e-6);
+    assert_eq!((scan.received, scan.gaps, scan.lost), (27, 2, 3));
     assert!(!scan.silent);
-    assert_eq!(s.streams["odometry"].missing_estimate, 0);
+    assert_eq!(s.streams["odometry"].lost, 0, "irregular timing is no loss");
 
     // The clouds stop (every one too large to reassemble); odometry goes on.
-    for k in 1..=80u64 {
-        let now = t_ms + k * 100;
-        let t = now as f64 / 1000.0;
-        b.on_odometry_at(&odom_at(wall(t)), ms(now), wall(t))
-            .unwrap();
-        b.tick(ms(now));
+    for k in 1..=80i64 {
+        t_ms += 100;
+        b.on_delivery("odometry", writer(1, 30 + k), ms(t_ms));
+        b.on_odometry(&odom(0.0, 0.0, 0.0), ms(t_ms)).unwrap();
+        b.tick(ms(t_ms));
     }
-    let s = b.status(ms(t_ms + 8000));
+    let s = b.status(ms(t_ms));
     let scan = s.streams["semantic_scan"];
     assert!(scan.silent);
     assert_eq!(scan.silences, 1, "one silence, counted once");
     assert!(scan.last_age_s.unwrap() > 7.9);
     assert!(!s.streams["odometry"].silent);
 
-    // ... and come back.
-    b.on_semantic_scan(&stamped(11.0), ms(t_ms + 8100)).unwrap();
-    let scan = b.status(ms(t_ms + 8100)).streams["semantic_scan"];
+    // ... and come back, 80 numbers later.
+    t_ms += 100;
+    b.on_delivery("semantic_scan", writer(2, 111), ms(t_ms));
+    let scan = b.status(ms(t_ms)).streams["semantic_scan"];
     assert!(!scan.silent);
-    assert_eq!(scan.silences, 1);
+    assert_eq!((scan.silences, scan.lost), (1, 3 + 80));
     // The JSON status carries it.
-    let json = serde_json::to_value(b.status(ms(t_ms + 8100))).unwrap();
-    assert_eq!(json["streams"]["semantic_scan"]["silences"], 1);
+    let json = serde_json::to_value(b.status(ms(t_ms))).unwrap();
+    assert_eq!(json["streams"]["semantic_scan"]["lost"], 83);
 }
 
 /// Drives the bridge in the room: returns the outputs of every tick.

@@ -278,3 +278,77 @@ fn dropping_the_node_logs_no_dds_errors() {
         .collect();
     assert!(errors.is_empty(), "{}", errors.join("\n"));
 }
+
+/// Issue 21, lost samples over real DDS: a sensor reader (best effort,
+/// keep last 5) that is not drained while a writer sends 300 samples keeps
+/// only some of them (the newest); the samples it lost never reach the
+/// node, and DDS says nothing. Their writer's sequence numbers, carried with every
+/// sample, show the gap: the stream monitor counts exactly the samples
+/// that were sent and not taken.
+#[test]
+fn samples_lost_before_decoding_are_counted_from_sequence_numbers() {
+    use sornav_platform_scout::streams::StreamMonitor;
+    if !netns::isolate("samples_lost_before_decoding_are_counted_from_sequence_numbers") {
+        return;
+    }
+    // Writer and reader in two participants, as two processes would be.
+    let ctx = node::loopback_context(DOMAIN + 2).unwrap();
+    let mut n = node::ros_node(&ctx, "/", "loss_writer").unwrap();
+    let publisher = node::publisher::<RosString>(&mut n, "/loss_test", Qos::SENSOR).unwrap();
+    let reader_ctx = node::loopback_context(DOMAIN + 2).unwrap();
+    let mut reader_node = node::ros_node(&reader_ctx, "/", "loss_reader").unwrap();
+    let reader =
+        node::subscription::<RosString>(&mut reader_node, "/loss_test", Qos::SENSOR).unwrap();
+    assert!(
+        wait_for(Duration::from_secs(10), || {
+            (n.subscription_count("/loss_test") > 0).then_some(())
+        })
+        .is_some(),
+        "the reader was not matched"
+    );
+    let send = |count: usize| {
+        for i in 0..count {
+            publisher
+                .publish(RosString {
+                    data: format!("sample {i}"),
+                })
+                .unwrap();
+        }
+        thread::sleep(Duration::from_millis(300));
+    };
+    let mut monitor = StreamMonitor::new();
+    let mut taken = Vec::new();
+    let take = |monitor: &mut StreamMonitor, taken: &mut Vec<i64>| {
+        let (samples, errors) = node::drain_with_source(&reader, 100);
+        assert!(errors.is_empty(), "{errors:?}");
+        for (_, source) in samples {
+            taken.push(source.sequence);
+            monitor.on_sample(Some(source), Duration::from_millis(taken.len() as u64));
+        }
+    };
+    // Three samples, taken as they come.
+    for _ in 0..3 {
+        send(1);
+        take(&mut monitor, &mut taken);
+    }
+    assert!(!taken.is_empty(), "nothing arrived over loopback");
+    // Many more without taking: the reader's history (5) cannot keep them.
+    send(300);
+    take(&mut monitor, &mut taken);
+    assert!(
+        taken.windows(2).all(|w| w[0] < w[1]),
+        "sequence numbers must increase: {taken:?}"
+    );
+    let status = monitor.status(Duration::from_secs(1));
+    let first = taken[0];
+    let last = *taken.last().unwrap();
+    assert_eq!(
+        status.lost,
+        (last - first + 1) as u64 - taken.len() as u64,
+        "{taken:?}"
+    );
+    // How many survive depends on when RustDDS moves samples into the
+    // reader's history of 5; most of the 300 cannot.
+    assert!(status.lost > 0, "nothing lost: {taken:?}");
+    eprintln!("taken {taken:?}: {} lost", status.lost);
+}
