@@ -679,7 +679,8 @@ impl Bridge {
     /// [`BridgeError::Frame`]; [`BridgeError::StaleOdometry`] when the
     /// stamp is more than `rates.odometry_max_age_s` older than `received`
     /// (a zero stamp is); [`BridgeError::FutureOdometry`] when it is more
-    /// than `rates.odometry_max_future_s` ahead; [`BridgeError::BadOdometry`].
+    /// than `rates.odometry_max_future_s` ahead (neither when
+    /// `rates.check_odometry_stamps` is false); [`BridgeError::BadOdometry`].
     /// Each is counted by cause and the pose is not used.
     pub fn on_odometry_at(
         &mut self,
@@ -690,14 +691,14 @@ impl Bridge {
         self.check_frame("odometry", &msg.header, now)?;
         let age_s = stamp_difference_s(received, msg.header.stamp);
         let rates = self.config.rates;
-        if age_s > rates.odometry_max_age_s {
+        if rates.check_odometry_stamps && age_s > rates.odometry_max_age_s {
             let e = BridgeError::StaleOdometry {
                 age_s,
                 max_s: rates.odometry_max_age_s,
             };
             return Err(self.reject(e, now));
         }
-        if -age_s > rates.odometry_max_future_s {
+        if rates.check_odometry_stamps && -age_s > rates.odometry_max_future_s {
             let e = BridgeError::FutureOdometry {
                 ahead_s: -age_s,
                 max_s: rates.odometry_max_future_s,

@@ -356,6 +356,11 @@ pub struct RatesConfig {
     /// node's wall clock (s; clock skew between computers): counted
     /// (`future_odometry`), not used. At most one hour.
     pub odometry_max_future_s: f64,
+    /// Whether odometry stamps are checked against the wall clock at all
+    /// (`odometry_max_age_s`, `odometry_max_future_s`). Turn it off when
+    /// the stamps are in simulated time (`use_sim_time`: a bag replayed, a
+    /// simulator's clock), which the wall clock would reject every time.
+    pub check_odometry_stamps: bool,
 }
 
 impl Default for RatesConfig {
@@ -368,6 +373,7 @@ impl Default for RatesConfig {
             odometry_timeout_s: 1.0,
             odometry_max_age_s: 1.0,
             odometry_max_future_s: 0.5,
+            check_odometry_stamps: true,
         }
     }
 }

@@ -212,6 +212,31 @@ fn odometry_within_the_stamp_tolerances_is_used() {
     assert_eq!(b.state(), NodeState::Idle);
 }
 
+/// Stamps in simulated time (`use_sim_time`: a bag replay) are an hour or
+/// years away from the wall clock: with `rates.check_odometry_stamps =
+/// false` they are used, not rejected.
+#[test]
+fn odometry_stamps_in_simulated_time_are_used_when_the_check_is_off() {
+    let mut c = stamp_config();
+    c.rates.check_odometry_stamps = false;
+    let mut b = Bridge::new(c).unwrap();
+    let hour_ago = Time {
+        sec: wall(0.0).sec - 3600,
+        nanosec: 0,
+    };
+    for (i, stamp) in [Time::default(), hour_ago, wall(7200.0)]
+        .into_iter()
+        .enumerate()
+    {
+        b.on_odometry_at(&odom_at(stamp), ms(i as u64 * 100), wall(0.0))
+            .unwrap();
+    }
+    assert_eq!(b.stats().odometry, 3);
+    assert_eq!(b.stats().rejected_messages, 0);
+    // on by default
+    assert!(ScoutConfig::default().rates.check_odometry_stamps);
+}
+
 #[test]
 fn bad_inputs_are_rejected_and_counted() {
     let mut b = Bridge::new(config()).unwrap();
