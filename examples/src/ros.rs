@@ -6,10 +6,18 @@ use std::sync::atomic::{AtomicBool, Ordering};
 
 /// The log filter when `RUST_LOG` is not set: `info`, but RustDDS at
 /// `warn` (with reliable cloud publishers it logs about 7,100
-/// "HeartbeatFrag handling not implemented" lines a minute at `info`) and
-/// ros2-client's check of `ROS_DISTRO` at `error` (no ROS install is needed,
-/// so "ROS_DISTRO is not set" is no news).
-pub const DEFAULT_LOG_FILTER: &str = "info,rustdds=warn,ros2_client::distributions=error";
+/// "HeartbeatFrag handling not implemented" lines a minute at `info`), two
+/// of its modules at `error`, and ros2-client's check of `ROS_DISTRO` at
+/// `error` (no ROS install is needed, so "ROS_DISTRO is not set" is no
+/// news). The two modules warn at every send, not once: in the 30-minute
+/// robot soak (README) `rustdds::rtps::writer` logged "No locators for
+/// RtpsReaderProxy" about 1,300 times a minute on a loopback-only
+/// participant (1.7 MB of log a minute) and `rustdds::network::udp_sender`
+/// "try_send_to_locator: Message size = ..." at every fragmented cloud
+/// (3 MB a minute in `sornav-simbot`). Their errors still show; set
+/// `RUST_LOG` to see their warnings.
+pub const DEFAULT_LOG_FILTER: &str = "info,rustdds=warn,rustdds::rtps::writer=error,\
+rustdds::network::udp_sender=error,ros2_client::distributions=error";
 
 /// The log filter: `RUST_LOG` when set (and valid), else
 /// [`DEFAULT_LOG_FILTER`].
@@ -48,8 +56,8 @@ mod tests {
 
     use super::DEFAULT_LOG_FILTER;
 
-    /// Issue 21: the default filter keeps RustDDS at warn and our own
-    /// crates at info.
+    /// Issue 21: the default filter keeps RustDDS at warn (but its two
+    /// per-send warnings) and our own crates at info.
     #[test]
     fn default_filter_keeps_rustdds_at_warn() {
         let sink = sornav_test_support::log_capture::LogSink::default();
@@ -63,13 +71,21 @@ mod tests {
             );
         tracing::subscriber::with_default(subscriber, || {
             tracing::info!(target: "rustdds::rtps::reader", "HeartbeatFrag handling not implemented");
-            tracing::warn!(target: "rustdds::rtps::writer", "dds warning kept");
+            tracing::warn!(target: "rustdds::discovery", "dds warning kept");
+            tracing::warn!(target: "rustdds::rtps::writer", "No locators for RtpsReaderProxy");
+            tracing::warn!(target: "rustdds::network::udp_sender", "Message size = 65348");
+            tracing::error!(target: "rustdds::rtps::writer", "dds error kept");
             tracing::warn!(target: "ros2_client::distributions", "ROS_DISTRO is not set");
             tracing::info!(target: "sornav_platform_scout::bridge", "bridge info kept");
         });
         let text = sink.text();
         assert!(!text.contains("HeartbeatFrag"), "{text}");
         assert!(!text.contains("ROS_DISTRO"), "{text}");
+        assert!(
+            !text.contains("No locators") && !text.contains("Message size"),
+            "{text}"
+        );
+        assert!(text.contains("dds error kept"), "{text}");
         assert!(
             text.contains("dds warning kept") && text.contains("bridge info kept"),
             "{text}"
