@@ -66,6 +66,14 @@ fn parse_status_every(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
+/// mimalloc instead of the system allocator: the node runs for hours with
+/// several DDS threads and clouds of varying size, and glibc's per-thread
+/// arenas kept freed memory (the robot soak in the README: a flat heap of
+/// about 145 MB under valgrind's massif, but resident memory growing about
+/// 3 MB a minute with the system allocator).
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() {
     if let Err(e) = run() {
         eprintln!("sornav-robot: {e}");
