@@ -9,7 +9,7 @@
 //!
 //! # One label vocabulary with the agent
 //! The agent reads every label through the supervisor's
-//! [`normalize_label`](sornav_supervisor::normalize_label), so the simulator
+//! [`normalize_label`], so the simulator
 //! uses the same function and the same synonym table (`couch` -> `sofa`,
 //! `television` -> `tv_monitor`, `bedside table` -> `nightstand`) instead of
 //! a copy: a name's category is its agent label, then folded by this
@@ -17,7 +17,7 @@
 //! is a `cabinet`, as in the procedural houses' statistics). Every label the
 //! simulator emits is therefore a fixed point of the agent's normaliser
 //! (written with `_` for spaces), and the goal lists are the agent's
-//! ([`HM3D_GOALS`] is [`OBJECTNAV_CATEGORIES`](sornav_supervisor::OBJECTNAV_CATEGORIES)).
+//! ([`HM3D_GOALS`] is [`OBJECTNAV_CATEGORIES`]).
 //! The tests check both.
 
 use std::sync::OnceLock;
@@ -27,7 +27,7 @@ use sornav_supervisor::{OBJECTNAV_CATEGORIES, normalize_label};
 use crate::scene::RoomType;
 
 /// HM3D ObjectNav goal categories: the agent's
-/// [`OBJECTNAV_CATEGORIES`](sornav_supervisor::OBJECTNAV_CATEGORIES).
+/// [`OBJECTNAV_CATEGORIES`].
 pub const HM3D_GOALS: [&str; 6] = OBJECTNAV_CATEGORIES;
 
 /// MP3D ObjectNav goal categories (the 21 of the Habitat challenge).
@@ -207,7 +207,7 @@ pub const COARSE: &[(&str, &str)] = &[
 ];
 
 /// The agent's label of `name` (the supervisor's
-/// [`normalize_label`](sornav_supervisor::normalize_label): case,
+/// [`normalize_label`]: case,
 /// separators, synonyms), written with `_` for spaces as the simulator's
 /// labels are; `None` for empty and structural names (wall, floor, door,
 /// ...).
