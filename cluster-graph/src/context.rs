@@ -75,8 +75,12 @@ impl LabelledObject for ObjectSummary {
 }
 
 /// An element `(l_j, N_j, d(o_j, C_k))` of a cluster's context `S_k`.
+///
+/// (Named apart from `sornav-supervisor`'s `CandidateObject`, the policy's
+/// input that `sornav` builds from it: both crates are re-exported by the
+/// facade.)
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct CandidateObject {
+pub struct ClusterObject {
     /// Label `l_j`.
     pub label: String,
     /// Support `N_j`.
@@ -103,7 +107,7 @@ pub struct ClusterContext {
     pub cluster: ClusterId,
     /// The qualifying objects by increasing distance (ties: label, then input
     /// order).
-    pub objects: Vec<CandidateObject>,
+    pub objects: Vec<ClusterObject>,
     /// Objects skipped because their centre had a NaN or infinite coordinate.
     pub rejected_non_finite: usize,
 }
@@ -254,7 +258,7 @@ impl<Id: Copy + Ord + Debug> ClusterGraph<Id> {
             cluster: k,
             objects: kept
                 .into_iter()
-                .map(|(i, distance)| CandidateObject {
+                .map(|(i, distance)| ClusterObject {
                     label: objects[i].label().to_owned(),
                     support: objects[i].support(),
                     distance,

@@ -93,7 +93,7 @@ mod ranking;
 pub use cluster_graph::{Cluster, ClusterEdge, ClusterGraph, ClusterId, Relocation};
 pub use config::{ClusterConfig, MAX_ETA};
 pub use context::{
-    CandidateObject, ClusterContext, LabelledObject, NearbyObject, ObjectSummary, RobotContext,
+    ClusterContext, ClusterObject, LabelledObject, NearbyObject, ObjectSummary, RobotContext,
     robot_context, robot_context_on_level,
 };
 pub use decision_graph::{

@@ -6,11 +6,29 @@
 //! stool, towel, shower, bathtub, counter, fireplace, gym_equipment, seating,
 //! clothes, chest_of_drawers, ...). [`classify`] applies the Sweet Home 3D rule:
 //! name first, catalog id second, otherwise the piece keeps its own label.
+//!
+//! # One label vocabulary with the agent
+//! The agent reads every label through the supervisor's
+//! [`normalize_label`], so the simulator
+//! uses the same function and the same synonym table (`couch` -> `sofa`,
+//! `television` -> `tv_monitor`, `bedside table` -> `nightstand`) instead of
+//! a copy: a name's category is its agent label, then folded by this
+//! module's coarser catalogue table ([`COARSE`]: a wardrobe or a nightstand
+//! is a `cabinet`, as in the procedural houses' statistics). Every label the
+//! simulator emits is therefore a fixed point of the agent's normaliser
+//! (written with `_` for spaces), and the goal lists are the agent's
+//! ([`HM3D_GOALS`] is [`OBJECTNAV_CATEGORIES`]).
+//! The tests check both.
+
+use std::sync::OnceLock;
+
+use sornav_supervisor::{OBJECTNAV_CATEGORIES, normalize_label};
 
 use crate::scene::RoomType;
 
-/// HM3D ObjectNav goal categories.
-pub const HM3D_GOALS: [&str; 6] = ["chair", "bed", "plant", "toilet", "tv_monitor", "sofa"];
+/// HM3D ObjectNav goal categories: the agent's
+/// [`OBJECTNAV_CATEGORIES`].
+pub const HM3D_GOALS: [&str; 6] = OBJECTNAV_CATEGORIES;
 
 /// MP3D ObjectNav goal categories (the 21 of the Habitat challenge).
 pub const MP3D_GOALS: [&str; 21] = [
@@ -37,97 +55,196 @@ pub const MP3D_GOALS: [&str; 21] = [
     "clothes",
 ];
 
-/// Ordered (phrase, category) rules; the first phrase contained in the
-/// normalised name (as whole words) wins, so specific phrases come first.
-const RULES: &[(&str, &str)] = &[
-    ("tv unit", "tv_monitor"),
-    ("tv table", "table"),
-    ("tv stand", "cabinet"),
-    ("tv cabinet", "cabinet"),
-    ("television", "tv_monitor"),
-    ("tv", "tv_monitor"),
-    ("monitor", "tv_monitor"),
+/// Catalogue phrases that name an object, searched in this order: the
+/// first phrase contained in the normalised name (as whole words) wins, so
+/// specific phrases come first. A phrase's category is its agent label
+/// (synonyms folded by the supervisor's table), folded by [`COARSE`].
+const PHRASES: &[&str] = &[
+    "tv unit",
+    "tv table",
+    "tv stand",
+    "tv cabinet",
+    "television",
+    "tv",
+    "monitor",
+    "screen",
+    "toilet paper",
+    "toilet",
+    "wc",
+    "bedside table",
+    "bedside",
+    "nightstand",
+    "night stand",
+    "bed",
+    "beds",
+    "bunk",
+    "sofa",
+    "couch",
+    "settee",
+    "armchair",
+    "chair",
+    "chairs",
+    "stool",
+    "bench",
+    "bank",
+    "seat",
+    "plant",
+    "plants",
+    "flowers",
+    "flower",
+    "potted",
+    "bathtub",
+    "bath tub",
+    "fitted bath",
+    "bath",
+    "tub",
+    "shower",
+    "washbasin",
+    "wash basin",
+    "sink",
+    "basin",
+    "chest of drawers",
+    "dresser",
+    "drawers",
+    "chest",
+    "table",
+    "desk",
+    "wardrobe",
+    "cupboard",
+    "cabinet",
+    "sideboard",
+    "bookcase",
+    "bookshelf",
+    "shelf",
+    "shelves",
+    "counter",
+    "worktop",
+    "fireplace",
+    "towel",
+    "towels",
+    "cushion",
+    "pillow",
+    "picture",
+    "painting",
+    "poster",
+    "frame",
+    "clothes washer",
+    "washing machine",
+    "clothes",
+    "treadmill",
+    "exercise",
+    "gym",
+    "fridge",
+    "refrigerator",
+    "cooker",
+    "stove",
+    "oven",
+    "dishwasher",
+    "mirror",
+    "lamp",
+    "light",
+    "uplight",
+    "spotlight",
+    "radiator",
+    "piano",
+];
+
+/// The simulator's catalogue folds: agent labels (the supervisor's
+/// vocabulary, `_` for spaces) that the simulator's coarser ObjectNav
+/// categories group (MP3D's grouping: wardrobes and nightstands are
+/// cabinets, desks are tables). Not synonyms: the agent keeps these labels
+/// apart, the simulator never emits them. Every label without a fold here
+/// is its own category.
+pub const COARSE: &[(&str, &str)] = &[
+    ("tv_unit", "tv_monitor"),
+    ("tv_table", "table"),
+    ("tv_stand", "cabinet"),
+    ("tv_cabinet", "cabinet"),
     ("screen", "tv_monitor"),
-    ("toilet paper", "toilet_paper"),
-    ("toilet", "toilet"),
     ("wc", "toilet"),
-    ("bedside table", "table"),
     ("bedside", "cabinet"),
     ("nightstand", "cabinet"),
-    ("night stand", "cabinet"),
-    ("bed", "bed"),
     ("beds", "bed"),
     ("bunk", "bed"),
-    ("sofa", "sofa"),
-    ("couch", "sofa"),
     ("settee", "sofa"),
-    ("armchair", "chair"),
-    ("chair", "chair"),
     ("chairs", "chair"),
-    ("stool", "stool"),
     ("bench", "seating"),
     ("bank", "seating"),
     ("seat", "seating"),
-    ("plant", "plant"),
-    ("plants", "plant"),
     ("flowers", "plant"),
-    ("flower", "plant"),
     ("potted", "plant"),
-    ("bathtub", "bathtub"),
-    ("bath tub", "bathtub"),
-    ("fitted bath", "bathtub"),
+    ("fitted_bath", "bathtub"),
     ("bath", "bathtub"),
     ("tub", "bathtub"),
-    ("shower", "shower"),
-    ("washbasin", "sink"),
-    ("wash basin", "sink"),
-    ("sink", "sink"),
+    ("wash_basin", "sink"),
     ("basin", "sink"),
-    ("chest of drawers", "chest_of_drawers"),
     ("dresser", "chest_of_drawers"),
     ("drawers", "chest_of_drawers"),
     ("chest", "chest_of_drawers"),
-    ("table", "table"),
     ("desk", "table"),
     ("wardrobe", "cabinet"),
     ("cupboard", "cabinet"),
-    ("cabinet", "cabinet"),
     ("sideboard", "cabinet"),
     ("bookcase", "shelving"),
     ("bookshelf", "shelving"),
     ("shelf", "shelving"),
     ("shelves", "shelving"),
-    ("counter", "counter"),
     ("worktop", "counter"),
-    ("fireplace", "fireplace"),
-    ("towel", "towel"),
     ("towels", "towel"),
-    ("cushion", "cushion"),
     ("pillow", "cushion"),
-    ("picture", "picture"),
     ("painting", "picture"),
     ("poster", "picture"),
     ("frame", "picture"),
-    ("clothes washer", "washing_machine"),
-    ("washing machine", "washing_machine"),
-    ("clothes", "clothes"),
+    ("clothes_washer", "washing_machine"),
     ("treadmill", "gym_equipment"),
     ("exercise", "gym_equipment"),
     ("gym", "gym_equipment"),
-    ("fridge", "refrigerator"),
-    ("refrigerator", "refrigerator"),
     ("cooker", "stove"),
-    ("stove", "stove"),
     ("oven", "stove"),
-    ("dishwasher", "dishwasher"),
-    ("mirror", "mirror"),
-    ("lamp", "lamp"),
     ("light", "lamp"),
     ("uplight", "lamp"),
     ("spotlight", "lamp"),
-    ("radiator", "radiator"),
-    ("piano", "piano"),
 ];
+
+/// The agent's label of `name` (the supervisor's
+/// [`normalize_label`]: case,
+/// separators, synonyms), written with `_` for spaces as the simulator's
+/// labels are; `None` for empty and structural names (wall, floor, door,
+/// ...).
+///
+/// # Examples
+/// ```
+/// use sornav_platform_sim::category::agent_label;
+/// assert_eq!(agent_label("Couch").as_deref(), Some("sofa"));
+/// assert_eq!(agent_label("chest of drawers").as_deref(), Some("chest_of_drawers"));
+/// assert_eq!(agent_label("Wall"), None);
+/// ```
+pub fn agent_label(name: &str) -> Option<String> {
+    normalize_label(name).map(|l| l.replace(' ', "_"))
+}
+
+/// The simulator's category of an agent label: its [`COARSE`] fold, or
+/// the label itself.
+fn coarse(label: String) -> String {
+    COARSE
+        .iter()
+        .find(|(from, _)| *from == label)
+        .map_or(label, |(_, to)| (*to).to_owned())
+}
+
+/// `(phrase, category)` for every entry of [`PHRASES`], computed once.
+fn rules() -> &'static [(&'static str, String)] {
+    static RULES: OnceLock<Vec<(&'static str, String)>> = OnceLock::new();
+    RULES.get_or_init(|| {
+        PHRASES
+            .iter()
+            .map(|&p| {
+                let label = agent_label(p).unwrap_or_else(|| p.replace(' ', "_"));
+                (p, coarse(label))
+            })
+            .collect()
+    })
+}
 
 /// Lower-cases, splits camelCase and keeps letters/digits as space-separated words.
 pub fn normalise(name: &str) -> String {
@@ -165,15 +282,28 @@ pub fn objectnav_category(name: &str) -> Option<&'static str> {
     if n.is_empty() {
         return None;
     }
-    RULES
+    rules()
         .iter()
         .find(|(p, _)| contains_phrase(&n, p))
-        .map(|(_, c)| *c)
+        .map(|(_, c)| c.as_str())
+}
+
+/// The label of an object name that no catalogue phrase recognises: its
+/// agent label folded by [`COARSE`] (so "Flowerpot" is a plant to the
+/// simulator too), or, for names the agent's normaliser drops (structural
+/// words), the normalised name with `_` for spaces; `None` for an empty
+/// name.
+pub fn own_label(name: &str) -> Option<String> {
+    let n = normalise(name);
+    if n.is_empty() {
+        return None;
+    }
+    Some(agent_label(&n).map_or_else(|| n.replace(' ', "_"), coarse))
 }
 
 /// Sweet Home 3D classification: `name` first, then the catalog id
 /// (`eTeks#toiletUnit` -> "toilet unit"), otherwise the piece's own label
-/// (normalised name with `_` for spaces, or "object" when both are empty).
+/// ([`own_label`] of the name, else of the catalog id, else "object").
 pub fn classify(name: &str, catalog_id: Option<&str>) -> String {
     if let Some(c) = objectnav_category(name) {
         return c.to_string();
@@ -184,17 +314,9 @@ pub fn classify(name: &str, catalog_id: Option<&str>) -> String {
     if let Some(c) = objectnav_category(cat_name) {
         return c.to_string();
     }
-    let own = normalise(name);
-    let own = if own.is_empty() {
-        normalise(cat_name)
-    } else {
-        own
-    };
-    if own.is_empty() {
-        "object".to_string()
-    } else {
-        own.replace(' ', "_")
-    }
+    own_label(name)
+        .or_else(|| own_label(cat_name))
+        .unwrap_or_else(|| "object".to_string())
 }
 
 /// Room type from a room name ("Bedroom #2" -> bedroom, "Corridor" -> hallway).
@@ -259,7 +381,7 @@ mod tests {
         assert_eq!(objectnav_category("TV unit"), Some("tv_monitor"));
         assert_eq!(objectnav_category("TV table"), Some("table"));
         assert_eq!(objectnav_category("Bed 90x190"), Some("bed"));
-        assert_eq!(objectnav_category("Bedside table"), Some("table"));
+        assert_eq!(objectnav_category("Bedside table"), Some("cabinet"));
         assert_eq!(objectnav_category("Corner sofa"), Some("sofa"));
         assert_eq!(objectnav_category("Washbasin with cabinet"), Some("sink"));
         assert_eq!(objectnav_category("Pendant lamp"), Some("lamp"));
@@ -267,6 +389,57 @@ mod tests {
         assert_eq!(classify("Box", Some("eTeks#texturableBox")), "box");
         assert_eq!(classify("", Some("eTeks#toiletUnit")), "toilet");
         assert_eq!(classify("Kitchen", Some("eTeks#kitchenCabinet")), "cabinet");
+        assert_eq!(classify("Railing", None), "railing");
+        assert_eq!(classify("", None), "object");
+    }
+
+    /// The agent's synonyms decide where they apply: the simulator's old
+    /// copy called a bedside table a table, the agent a nightstand (now a
+    /// cabinet to the simulator, as every nightstand); a flowerpot was not
+    /// a plant to the simulator but was one to the agent.
+    #[test]
+    fn agent_synonyms_apply_in_the_simulator() {
+        assert_eq!(objectnav_category("Bedside table"), Some("cabinet"));
+        assert_eq!(objectnav_category("Night stand"), Some("cabinet"));
+        assert_eq!(objectnav_category("Corner couch"), Some("sofa"));
+        assert_eq!(objectnav_category("Fridge & Freezer"), Some("refrigerator"));
+        assert_eq!(classify("Flowerpot", None), "plant");
+        assert_eq!(classify("Trashcan", None), "trash_can");
+    }
+
+    /// Every label the simulator can emit means the same to the agent: a
+    /// fixed point of the agent's normaliser and of the catalogue folds.
+    #[test]
+    fn emitted_labels_are_agent_labels() {
+        let fixed = |c: &str| {
+            assert_eq!(agent_label(c).as_deref(), Some(c), "agent relabels {c}");
+            assert_eq!(coarse(c.to_owned()), c, "folded twice: {c}");
+        };
+        for (phrase, c) in rules() {
+            assert!(!c.is_empty(), "{phrase}");
+            fixed(c);
+        }
+        for c in HM3D_GOALS.iter().chain(&MP3D_GOALS) {
+            fixed(c);
+        }
+        for (from, to) in COARSE {
+            // A fold applies to agent labels only (a key the agent renames
+            // would never be reached) and lands on a category.
+            assert_eq!(agent_label(from).as_deref(), Some(*from), "{from}");
+            fixed(to);
+            assert!(
+                PHRASES.iter().any(|p| p.replace(' ', "_") == *from),
+                "{from}"
+            );
+        }
+        // The procedural houses' categories.
+        let stats: serde_json::Value =
+            serde_json::from_str(include_str!("../data/hm3d_val_stats.json")).unwrap();
+        for room in stats["room_types"].as_array().unwrap() {
+            for o in room["objects"].as_array().unwrap() {
+                fixed(o["category"].as_str().unwrap());
+            }
+        }
     }
 
     #[test]

@@ -17,7 +17,7 @@ use std::path::Path;
 use nalgebra::{Matrix4, Point3};
 
 use crate::SceneError;
-use crate::category::{normalise, objectnav_category};
+use crate::category::{normalise, objectnav_category, own_label};
 use crate::geometry::MeshBuilder;
 use crate::scene::{InstanceKind, Level, Scene};
 
@@ -54,7 +54,8 @@ fn kind_and_category(label: &str) -> (InstanceKind, String) {
     }
     let cat = objectnav_category(label)
         .map(str::to_string)
-        .unwrap_or(if n.is_empty() { "object".into() } else { n });
+        .or_else(|| own_label(label))
+        .unwrap_or_else(|| "object".into());
     (kind, cat)
 }
 

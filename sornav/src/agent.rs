@@ -14,9 +14,9 @@ use sornav_executor::{
 use sornav_frontier_graph::{FrontierGraph, FrontierId, LevelId, MultiLevelMap, NodeId};
 use sornav_semantic_map::{DepthFrame, LabelId, SemanticMap};
 use sornav_supervisor::{
-    Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject, ContextPolicy,
-    MissionKind as SupKind, MissionState, NeverRelocate, RegionContext, StepInput, Supervisor,
-    SupervisorCommand, normalize_label,
+    ActiveMissionKind as SupKind, Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy,
+    ContextObject, ContextPolicy, MissionState, NeverRelocate, RegionContext, StepInput,
+    Supervisor, SupervisorCommand, normalize_label,
 };
 use sornav_target_gate::{CandidateReport, GateCommand, NeverVisible, ObjectId, TargetGate};
 use sornav_tsp::HorizonPlan;

@@ -12,9 +12,9 @@ use std::time::Instant;
 
 use nalgebra::Point3;
 use sornav_supervisor::{
-    Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject, ContextPolicy,
-    MissionKind, MissionState, RegionContext, RegionSnapshot, Situation, StepInput, Supervisor,
-    SupervisorConfig,
+    ActiveMissionKind, Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy,
+    ContextObject, ContextPolicy, MissionState, RegionContext, RegionSnapshot, Situation,
+    StepInput, Supervisor, SupervisorConfig,
 };
 
 const LABELS: [&str; 20] = [
@@ -111,7 +111,7 @@ fn main() {
         target_accepted: None,
         mission: MissionState {
             id: 1,
-            kind: MissionKind::Idle,
+            kind: ActiveMissionKind::Idle,
         },
         first_frontier: Some(Point3::origin()),
     };

@@ -43,7 +43,7 @@
 //! ```
 //! use sornav_supervisor::{
 //!     Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy, ContextObject,
-//!     MissionKind, MissionState, RegionContext, StepInput, Supervisor, SupervisorCommand,
+//!     ActiveMissionKind, MissionState, RegionContext, StepInput, Supervisor, SupervisorCommand,
 //!     SupervisorConfig,
 //! };
 //! use nalgebra::Point3;
@@ -53,7 +53,7 @@
 //! let input = StepInput {
 //!     target: "toilet",
 //!     target_accepted: None,
-//!     mission: MissionState { id: 1, kind: MissionKind::Explore },
+//!     mission: MissionState { id: 1, kind: ActiveMissionKind::Explore },
 //!     first_frontier: Some(Point3::new(1.0, 0.0, 0.0)),
 //! };
 //! // The robot searches a bedroom; a cluster 6 m away shows a sink and a bathtub.
@@ -125,6 +125,6 @@ pub use prior::{
 pub struct ReadmeDoctests;
 
 pub use supervisor::{
-    AlgorithmStep, ClusterCandidate, MissionKind, MissionState, RegionContext, StepInput,
+    ActiveMissionKind, AlgorithmStep, ClusterCandidate, MissionState, RegionContext, StepInput,
     Supervisor, SupervisorCommand, SupervisorConfig, SupervisorStats,
 };

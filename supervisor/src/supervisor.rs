@@ -16,7 +16,7 @@
 //! logged with `tracing` (target `sornav_supervisor`).
 //!
 //! Two additions to the paper's listing:
-//! * when no mission is active ([`MissionKind::Idle`]), step 4 does not hold
+//! * when no mission is active ([`ActiveMissionKind::Idle`]), step 4 does not hold
 //!   the decision back, since there is no frontier mission to continue;
 //! * after a relocation ends, the region it reached is explored for
 //!   [`SupervisorConfig::region_dwell_s`] before the policy is asked again
@@ -78,10 +78,12 @@ impl Default for SupervisorConfig {
     }
 }
 
-/// The kind of the executor's active mission.
+/// The kind of the executor's active mission, as the supervisor sees it
+/// (no payload; named apart from `sornav-executor`'s `MissionKind`, which
+/// carries the mission's goal: both crates are re-exported by `sornav`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
-pub enum MissionKind {
+pub enum ActiveMissionKind {
     /// No active mission.
     Idle,
     /// Exploring a frontier.
@@ -98,7 +100,7 @@ pub struct MissionState {
     /// Identifier of the active mission (changes with every new mission).
     pub id: u64,
     /// Its kind.
-    pub kind: MissionKind,
+    pub kind: ActiveMissionKind,
 }
 
 /// A cluster of the cluster graph as seen by step 5: its geometric utility
@@ -218,7 +220,7 @@ pub struct Supervisor<P, T> {
     start: Option<T>,
     last_evaluation: Option<T>,
     /// Kind of the mission at the previous step (relocation end detection).
-    previous_kind: Option<MissionKind>,
+    previous_kind: Option<ActiveMissionKind>,
     /// Elapsed time (s) until which the region reached by the last
     /// relocation is explored without asking the policy.
     dwell_until_s: Option<f64>,
@@ -293,7 +295,9 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
         self.stats.steps += 1;
         // A relocation that ended starts the exploration of its region.
         let previous = self.previous_kind.replace(input.mission.kind);
-        if previous == Some(MissionKind::Relocate) && input.mission.kind != MissionKind::Relocate {
+        if previous == Some(ActiveMissionKind::Relocate)
+            && input.mission.kind != ActiveMissionKind::Relocate
+        {
             self.dwell_until_s = Some(elapsed_s + self.config.region_dwell_s);
         }
         // Step 2: reliable target evidence pre-empts everything.
@@ -302,12 +306,12 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
             return Ok(SupervisorCommand::NavToObject { target_id });
         }
         // Step 3: an active relocation is kept (and region reasoning suppressed).
-        if input.mission.kind == MissionKind::Relocate {
+        if input.mission.kind == ActiveMissionKind::Relocate {
             debug!(target: "sornav_supervisor", step = ?AlgorithmStep::RelocationActive, "keep relocation");
             return Ok(SupervisorCommand::KeepRelocation);
         }
         // Step 4: rate limit.
-        if input.mission.kind != MissionKind::Idle
+        if input.mission.kind != ActiveMissionKind::Idle
             && let Some(last) = self.last_evaluation
             && now.seconds_since(&last) < self.config.interval_s
         {
@@ -359,7 +363,7 @@ impl<P: ContextPolicy, T: Timestamp> Supervisor<P, T> {
                     self.stats.relocations += 1;
                     // The relocation may start and end between two steps:
                     // its end is detected at the next step either way.
-                    self.previous_kind = Some(MissionKind::Relocate);
+                    self.previous_kind = Some(ActiveMissionKind::Relocate);
                     SupervisorCommand::Relocate {
                         cluster_id: k,
                         waypoint: c.waypoint,

@@ -8,7 +8,7 @@ use std::time::Duration;
 use nalgebra::Point3;
 use proptest::prelude::*;
 use sornav_supervisor::{
-    Candidate, ClusterCandidate, ContextObject, ContextPolicy, MissionKind, MissionState,
+    ActiveMissionKind, Candidate, ClusterCandidate, ContextObject, ContextPolicy, MissionState,
     PolicyDecision, RegionContext, RegionSnapshot, Situation, StepInput, Supervisor,
     SupervisorCommand, SupervisorConfig, SupervisorError,
 };
@@ -50,7 +50,7 @@ impl ContextPolicy for Scripted {
 struct Event {
     dt: f64,
     accepted: Option<u64>,
-    kind: MissionKind,
+    kind: ActiveMissionKind,
     mission_id: u64,
     u_geo: Vec<f64>,
     choice: Choice,
@@ -61,10 +61,10 @@ fn arb_event() -> impl Strategy<Value = Event> {
         prop_oneof![Just(0.0), 0.0..0.6f64, 0.5..3.0f64],
         prop::option::weighted(0.15, 0u64..50),
         prop_oneof![
-            Just(MissionKind::Idle),
-            Just(MissionKind::Explore),
-            Just(MissionKind::Relocate),
-            Just(MissionKind::NavToObject)
+            Just(ActiveMissionKind::Idle),
+            Just(ActiveMissionKind::Explore),
+            Just(ActiveMissionKind::Relocate),
+            Just(ActiveMissionKind::NavToObject)
         ],
         0u64..4,
         prop::collection::vec(0.0..10.0f64, 0..7),
@@ -118,11 +118,11 @@ proptest! {
         let mut t = 0.0;
         let mut last_eval: Option<f64> = None;
         let mut calls = 0;
-        let mut previous: Option<MissionKind> = None;
+        let mut previous: Option<ActiveMissionKind> = None;
         let mut dwell_until: Option<f64> = None;
         for e in &events {
             t += e.dt;
-            if previous == Some(MissionKind::Relocate) && e.kind != MissionKind::Relocate {
+            if previous == Some(ActiveMissionKind::Relocate) && e.kind != ActiveMissionKind::Relocate {
                 dwell_until = Some(t + dwell);
             }
             previous = Some(e.kind);
@@ -145,10 +145,10 @@ proptest! {
             if let Some(id) = e.accepted {
                 prop_assert_eq!(&got, &SupervisorCommand::NavToObject { target_id: id });
                 expected_kind = "nav";
-            } else if e.kind == MissionKind::Relocate {
+            } else if e.kind == ActiveMissionKind::Relocate {
                 prop_assert_eq!(&got, &SupervisorCommand::KeepRelocation);
                 expected_kind = "keep";
-            } else if e.kind != MissionKind::Idle && last_eval.is_some_and(|l| t - l < INTERVAL) {
+            } else if e.kind != ActiveMissionKind::Idle && last_eval.is_some_and(|l| t - l < INTERVAL) {
                 prop_assert_eq!(&got, &SupervisorCommand::ContinueMission);
                 expected_kind = "continue";
             } else if dwell_until.is_some_and(|u| t < u) {
@@ -173,7 +173,7 @@ proptest! {
                             if *cluster_id == c.candidate.cluster_id && *waypoint == c.waypoint);
                         prop_assert!(is_expected, "{:?}", got);
                         // A commanded relocation counts as under way.
-                        previous = Some(MissionKind::Relocate);
+                        previous = Some(ActiveMissionKind::Relocate);
                     }
                     _ => {
                         let is_expected = matches!(&got, SupervisorCommand::Explore { frontier: f, .. } if *f == frontier);
@@ -201,7 +201,7 @@ fn works_on_duration_and_instant_clocks_and_rejects_nan_time() {
         target_accepted: None,
         mission: MissionState {
             id: 1,
-            kind: MissionKind::Explore,
+            kind: ActiveMissionKind::Explore,
         },
         first_frontier: None,
     };
@@ -276,7 +276,7 @@ fn the_region_reached_by_a_relocation_is_explored_first() {
     };
     let mut sup: Supervisor<_, f64> = Supervisor::new(policy, config).unwrap();
     let frontier = Some(Point3::new(1.0, 2.0, 0.0));
-    let step = |sup: &mut Supervisor<_, f64>, t: f64, kind: MissionKind| {
+    let step = |sup: &mut Supervisor<_, f64>, t: f64, kind: ActiveMissionKind| {
         let input = StepInput {
             target: "toilet",
             target_accepted: None,
@@ -290,17 +290,17 @@ fn the_region_reached_by_a_relocation_is_explored_first() {
         .unwrap()
     };
     assert!(matches!(
-        step(&mut sup, 0.0, MissionKind::Idle),
+        step(&mut sup, 0.0, ActiveMissionKind::Idle),
         SupervisorCommand::Relocate { .. }
     ));
     assert_eq!(
-        step(&mut sup, 3.0, MissionKind::Relocate),
+        step(&mut sup, 3.0, ActiveMissionKind::Relocate),
         SupervisorCommand::KeepRelocation
     );
     // The relocation ended at t = 10: explore the new region until t = 15.
     for t in [10.0, 12.0, 14.9] {
         assert_eq!(
-            step(&mut sup, t, MissionKind::Idle),
+            step(&mut sup, t, ActiveMissionKind::Idle),
             SupervisorCommand::ExploreNewRegion {
                 frontier,
                 remaining_s: 15.0 - t
@@ -309,7 +309,7 @@ fn the_region_reached_by_a_relocation_is_explored_first() {
     }
     let calls = seen.borrow().len();
     assert!(matches!(
-        step(&mut sup, 15.0, MissionKind::Idle),
+        step(&mut sup, 15.0, ActiveMissionKind::Idle),
         SupervisorCommand::Relocate { .. }
     ));
     assert_eq!(
@@ -320,21 +320,21 @@ fn the_region_reached_by_a_relocation_is_explored_first() {
     // That relocation starts and ends between two steps (its waypoint is
     // within the arrival radius): its end still starts the dwell.
     assert!(matches!(
-        step(&mut sup, 16.0, MissionKind::Idle),
+        step(&mut sup, 16.0, ActiveMissionKind::Idle),
         SupervisorCommand::ExploreNewRegion { .. }
     ));
     assert!(matches!(
-        step(&mut sup, 21.0, MissionKind::Idle),
+        step(&mut sup, 21.0, ActiveMissionKind::Idle),
         SupervisorCommand::Relocate { .. }
     ));
     // Target evidence still pre-empts the dwell.
-    step(&mut sup, 22.0, MissionKind::Relocate);
+    step(&mut sup, 22.0, ActiveMissionKind::Relocate);
     let input = StepInput {
         target: "toilet",
         target_accepted: Some(7),
         mission: MissionState {
             id: 2,
-            kind: MissionKind::Explore,
+            kind: ActiveMissionKind::Explore,
         },
         first_frontier: frontier,
     };
@@ -361,7 +361,7 @@ fn invalid_snapshot_and_unknown_cluster_fall_back_to_exploring() {
         target_accepted: None,
         mission: MissionState {
             id: 1,
-            kind: MissionKind::Idle,
+            kind: ActiveMissionKind::Idle,
         },
         first_frontier: None,
     };
