@@ -58,7 +58,7 @@
 //! };
 //! // The robot searches a bedroom; a cluster 6 m away shows a sink and a bathtub.
 //! let region = || RegionContext {
-//!     local_context: ["bed", "wardrobe", "nightstand"]
+//!     local_context: ["bed", "wardrobe", "nightstand", "pillow"]
 //!         .map(|l| ContextObject::new(l, 200.0))
 //!         .to_vec(),
 //!     clusters: vec![ClusterCandidate {
@@ -98,6 +98,7 @@ mod label;
 #[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
 pub mod llm;
 mod llm_config;
+mod logistic;
 mod policy;
 mod prior;
 mod supervisor;
@@ -117,7 +118,8 @@ pub use llm::LlmPolicy;
 pub use llm_config::{LlmConfig, LlmLatency, LlmStats};
 pub use policy::{ContextPolicy, NeverRelocate, PolicyAction, PolicyDecision, Situation};
 pub use prior::{
-    ATTRIBUTION, CooccurrencePrior, MP3D_EXTRA_TARGETS, Posterior, PriorBuildConfig, TargetRow,
+    ATTRIBUTION, CooccurrencePrior, LogisticRow, MAX_SUBSETS_PER_REGION, MP3D_EXTRA_TARGETS,
+    Posterior, PriorBuildConfig, PriorModel, TargetRow,
 };
 /// The README's example, compiled and run as a doc test.
 #[cfg(doctest)]
