@@ -426,7 +426,10 @@ fn main() -> ExitCode {
         })
     };
     let shipped = PriorBuildConfig::default();
-    let mut models: Vec<(String, Option<(f64, f64)>, Fit)> = vec![
+    /// A model's name, its (beta, lambda) when it is in the subset-logistic
+    /// grid, and how to fit it.
+    type Candidate = (String, Option<(f64, f64)>, Fit);
+    let mut models: Vec<Candidate> = vec![
         ("naive Bayes, beta = 0".into(), None, nb(0.0)),
         (
             "naive Bayes, beta = 0.5 (shipped before)".into(),

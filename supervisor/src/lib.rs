@@ -7,9 +7,10 @@
 //! Algorithm 1 of SOR-Nav (target first, keep an active relocation,
 //! rate-limit, then ask a policy) over any clock, with three policies:
 //!
-//! * [`CommonsensePolicy`] — the embedded default, no network: a naive-Bayes
-//!   prior `P(target | objects seen)` derived from HM3D-Semantics train scenes
-//!   ([`CooccurrencePrior`]). It relocates only on `Conflict(g, S_r)`.
+//! * [`CommonsensePolicy`] — the embedded default, no network: a prior
+//!   `P(target | objects seen)` (logistic regression over the observed
+//!   labels, fitted on partial views of HM3D-Semantics train regions;
+//!   [`CooccurrencePrior`]). It relocates only on `Conflict(g, S_r)`.
 //! * `LlmPolicy` (cargo feature `llm`, on by default) — an OpenAI-compatible
 //!   chat-completions client with strict JSON-schema answers, validation,
 //!   caching, an asynchronous mode and JSONL record/replay.
