@@ -85,6 +85,10 @@ const EMBEDDED_JSON: &str = include_str!("../data/hm3d_cooccurrence_prior.json")
 /// grows linearly with it).
 pub const MAX_SUBSETS_PER_REGION: usize = 64;
 
+/// Largest magnitude a table's logistic coefficient may have (the fitted
+/// ones are below 10); larger values are rejected as malformed.
+const MAX_LOGISTIC_COEFFICIENT: f64 = 1e6;
+
 /// Which posterior a [`CooccurrencePrior`] computes (see the module
 /// documentation for the formulas).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
@@ -312,13 +316,17 @@ impl CooccurrencePrior {
             if !self.targets.contains_key(g) {
                 return bad(format!("logistic row {g:?} is not a target"));
             }
-            if !(row.intercept.is_finite() && row.evidence_size.is_finite()) {
-                return bad(format!("target {g:?}: non-finite logistic coefficient"));
+            // Bounded coefficients keep every logit finite (no inf - inf).
+            let sane = |x: f64| x.is_finite() && x.abs() <= MAX_LOGISTIC_COEFFICIENT;
+            if !(sane(row.intercept) && sane(row.evidence_size)) {
+                return bad(format!(
+                    "target {g:?}: logistic coefficient not finite or too large"
+                ));
             }
             for (l, w) in &row.weights {
-                if !self.labels.contains_key(l) || !w.is_finite() {
+                if !self.labels.contains_key(l) || !sane(*w) {
                     return bad(format!(
-                        "target {g:?}: logistic weight of {l:?} outside the vocabulary or not finite"
+                        "target {g:?}: logistic weight of {l:?} outside the vocabulary, not finite or too large"
                     ));
                 }
             }
@@ -765,6 +773,9 @@ mod tests {
         assert!(CooccurrencePrior::from_json(&p.to_json()).is_err());
         let mut p = CooccurrencePrior::embedded().clone();
         p.config.l2 = -1.0;
+        assert!(CooccurrencePrior::from_json(&p.to_json()).is_err());
+        let mut p = CooccurrencePrior::embedded().clone();
+        p.logistic.get_mut("sofa").unwrap().intercept = 1e300;
         assert!(CooccurrencePrior::from_json(&p.to_json()).is_err());
         // A table without a model field is the naive Bayes of before.
         let mut v: serde_json::Value =
