@@ -14,6 +14,7 @@ const NIGHTSTAND: u16 = 20;
 const WARDROBE: u16 = 21;
 const SINK: u16 = 22;
 const BATHTUB: u16 = 23;
+const PILLOW: u16 = 24;
 
 /// A bedroom (x 0-5) with an opening to the west, a 28 m corridor, and a
 /// bathroom (x 33-37) with an opening to the east. No toilet in sight.
@@ -30,6 +31,10 @@ fn house() -> World {
             object(BED, 0.5, 2.6, 2.5, 3.8, 0.0, 0.6),
             object(NIGHTSTAND, 2.7, 3.4, 3.1, 3.8, 0.0, 0.5),
             object(WARDROBE, 3.5, 3.3, 4.8, 3.8, 0.0, 2.0),
+            // A fourth bedroom object: the calibrated prior leaves
+            // P(toilet | bed, nightstand, wardrobe) = 0.06, above the 0.05
+            // conflict threshold.
+            object(PILLOW, 1.0, 0.2, 1.8, 0.8, 0.0, 0.5),
             // Corridor.
             wall(5.0, 1.4, 33.0, 1.5),
             wall(5.0, 2.5, 33.0, 2.6),
@@ -53,6 +58,7 @@ fn config(variant: Variant) -> AgentConfig {
         (WARDROBE, "wardrobe"),
         (SINK, "sink"),
         (BATHTUB, "bathtub"),
+        (PILLOW, "pillow"),
     ] {
         c.labels.push(LabelEntry {
             id,

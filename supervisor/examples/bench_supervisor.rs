@@ -7,14 +7,16 @@
 //!
 //! Prints one JSON line: medians over 15 repetitions of 2,000 decisions each,
 //! for a snapshot of 15 local objects and K = 10 candidates of 10 objects.
+//! `commonsense_decide_nb_us_p50` times the same decision over the embedded
+//! table's counts as the naive-Bayes prior shipped before (same run).
 
 use std::time::Instant;
 
 use nalgebra::Point3;
 use sornav_supervisor::{
-    ActiveMissionKind, Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy,
-    ContextObject, ContextPolicy, MissionState, RegionContext, RegionSnapshot, Situation,
-    StepInput, Supervisor, SupervisorConfig,
+    ActiveMissionKind, Candidate, CandidateObject, ClusterCandidate, CommonsenseConfig,
+    CommonsensePolicy, ContextObject, ContextPolicy, CooccurrencePrior, MissionState, PriorModel,
+    RegionContext, RegionSnapshot, Situation, StepInput, Supervisor, SupervisorConfig,
 };
 
 const LABELS: [&str; 20] = [
@@ -91,20 +93,60 @@ fn main() {
         mission_id: 1,
         elapsed_s: 0.0,
     };
-    let mut policy = CommonsensePolicy::default();
-    let mut relocations = 0usize;
-    let mut policy_us = Vec::with_capacity(REPS);
-    for _ in 0..REPS {
-        let t = Instant::now();
-        for _ in 0..N {
-            relocations += usize::from(
-                std::hint::black_box(policy.decide(&snapshot, &situation))
-                    .relocation()
-                    .is_some(),
-            );
+    let mut naive_bayes = CooccurrencePrior::embedded().clone();
+    naive_bayes.config.model = PriorModel::NaiveBayes;
+    naive_bayes.logistic.clear();
+    let time_decisions = |mut policy: CommonsensePolicy<'_>| {
+        let mut relocations = 0usize;
+        let mut us = Vec::with_capacity(REPS);
+        for _ in 0..REPS {
+            let t = Instant::now();
+            for _ in 0..N {
+                relocations += usize::from(
+                    std::hint::black_box(policy.decide(&snapshot, &situation))
+                        .relocation()
+                        .is_some(),
+                );
+            }
+            us.push(t.elapsed().as_secs_f64() * 1e6 / N as f64);
         }
-        policy_us.push(t.elapsed().as_secs_f64() * 1e6 / N as f64);
-    }
+        (median(us), relocations)
+    };
+    // The posterior alone, over the snapshot's 11 contexts (local + 10
+    // candidates): the per-model cost whatever the decision.
+    let contexts: Vec<Vec<&str>> = std::iter::once(
+        snapshot
+            .local_context
+            .iter()
+            .map(|o| o.label.as_str())
+            .collect(),
+    )
+    .chain(
+        snapshot
+            .candidates
+            .iter()
+            .map(|c| c.context.iter().map(|o| o.label.as_str()).collect()),
+    )
+    .collect();
+    let time_posteriors = |prior: &CooccurrencePrior| {
+        let mut us = Vec::with_capacity(REPS);
+        for _ in 0..REPS {
+            let t = Instant::now();
+            for _ in 0..N {
+                for c in &contexts {
+                    std::hint::black_box(prior.posterior("toilet", c.iter().copied()));
+                }
+            }
+            us.push(t.elapsed().as_secs_f64() * 1e6 / N as f64);
+        }
+        median(us)
+    };
+    let posterior_us = time_posteriors(CooccurrencePrior::embedded());
+    let posterior_nb_us = time_posteriors(&naive_bayes);
+    let (policy_us, relocations) = time_decisions(CommonsensePolicy::default());
+    let (nb_us, relocations_nb) = time_decisions(
+        CommonsensePolicy::new(&naive_bayes, CommonsenseConfig::default()).expect("valid config"),
+    );
     let mut step_us = Vec::with_capacity(REPS);
     let input = StepInput {
         target: "toilet",
@@ -133,7 +175,11 @@ fn main() {
             "local_objects": 15,
             "candidates": 10,
             "objects_per_candidate": 10,
-            "commonsense_decide_us_p50": median(policy_us),
+            "commonsense_decide_us_p50": policy_us,
+            "commonsense_decide_nb_us_p50": nb_us,
+            "posterior_11_contexts_us_p50": posterior_us,
+            "posterior_11_contexts_nb_us_p50": posterior_nb_us,
+            "relocations_nb": relocations_nb,
             "supervisor_step_us_p50": median(step_us),
             "relocations": relocations,
         })

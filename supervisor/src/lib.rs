@@ -7,9 +7,10 @@
 //! Algorithm 1 of SOR-Nav (target first, keep an active relocation,
 //! rate-limit, then ask a policy) over any clock, with three policies:
 //!
-//! * [`CommonsensePolicy`] — the embedded default, no network: a naive-Bayes
-//!   prior `P(target | objects seen)` derived from HM3D-Semantics train scenes
-//!   ([`CooccurrencePrior`]). It relocates only on `Conflict(g, S_r)`.
+//! * [`CommonsensePolicy`] — the embedded default, no network: a prior
+//!   `P(target | objects seen)` (logistic regression over the observed
+//!   labels, fitted on partial views of HM3D-Semantics train regions;
+//!   [`CooccurrencePrior`]). It relocates only on `Conflict(g, S_r)`.
 //! * `LlmPolicy` (cargo feature `llm`, on by default) — an OpenAI-compatible
 //!   chat-completions client with strict JSON-schema answers, validation,
 //!   caching, an asynchronous mode and JSONL record/replay.
@@ -58,7 +59,7 @@
 //! };
 //! // The robot searches a bedroom; a cluster 6 m away shows a sink and a bathtub.
 //! let region = || RegionContext {
-//!     local_context: ["bed", "wardrobe", "nightstand"]
+//!     local_context: ["bed", "wardrobe", "nightstand", "pillow"]
 //!         .map(|l| ContextObject::new(l, 200.0))
 //!         .to_vec(),
 //!     clusters: vec![ClusterCandidate {
@@ -98,6 +99,7 @@ mod label;
 #[cfg_attr(docsrs, doc(cfg(feature = "llm")))]
 pub mod llm;
 mod llm_config;
+mod logistic;
 mod policy;
 mod prior;
 mod supervisor;
@@ -117,7 +119,8 @@ pub use llm::LlmPolicy;
 pub use llm_config::{LlmConfig, LlmLatency, LlmStats};
 pub use policy::{ContextPolicy, NeverRelocate, PolicyAction, PolicyDecision, Situation};
 pub use prior::{
-    ATTRIBUTION, CooccurrencePrior, MP3D_EXTRA_TARGETS, Posterior, PriorBuildConfig, TargetRow,
+    ATTRIBUTION, CooccurrencePrior, LogisticRow, MAX_SUBSETS_PER_REGION, MP3D_EXTRA_TARGETS,
+    Posterior, PriorBuildConfig, PriorModel, TargetRow,
 };
 /// The README's example, compiled and run as a doc test.
 #[cfg(doctest)]

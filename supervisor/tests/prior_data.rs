@@ -15,7 +15,42 @@ fn build_prior_regenerates_the_embedded_table_exactly() {
     let Some(stats) = stats() else { return };
     assert_eq!(stats.skipped_rows, 0);
     let prior = CooccurrencePrior::build(&stats.regions, PriorBuildConfig::default()).unwrap();
-    assert_eq!(prior.to_json(), CooccurrencePrior::embedded_json());
+    let embedded = CooccurrencePrior::embedded();
+    // Counts, vocabulary and settings exactly; the logistic coefficients to
+    // 1e-9 (a Newton solve may differ in the last bits between CPUs, where
+    // faer picks other SIMD kernels).
+    assert_eq!(
+        (
+            &prior.config,
+            &prior.labels,
+            &prior.targets,
+            prior.train_regions
+        ),
+        (
+            &embedded.config,
+            &embedded.labels,
+            &embedded.targets,
+            embedded.train_regions
+        )
+    );
+    assert_eq!(
+        prior.logistic.keys().collect::<Vec<_>>(),
+        embedded.logistic.keys().collect::<Vec<_>>()
+    );
+    let close = |a: f64, b: f64| (a - b).abs() <= 1e-9 * (1.0 + a.abs());
+    for (g, row) in &prior.logistic {
+        let other = &embedded.logistic[g];
+        assert!(close(row.intercept, other.intercept), "{g}");
+        assert!(close(row.evidence_size, other.evidence_size), "{g}");
+        assert_eq!(row.weights.len(), other.weights.len(), "{g}");
+        for (l, w) in &row.weights {
+            assert!(
+                close(*w, other.weights[l]),
+                "{g} / {l}: {w} vs {}",
+                other.weights[l]
+            );
+        }
+    }
     // Train only: 145 scenes with statistics (ids below 00800).
     assert_eq!(prior.train_scenes, 145);
     assert!(
@@ -39,8 +74,18 @@ fn val_regions_are_not_used_by_the_build() {
     );
 }
 
+/// Issue 22 item 7's naive-Bayes baseline (val ROC AUC per category).
+const ISSUE_BASELINE: [(&str, f64); 6] = [
+    ("bed", 0.957),
+    ("chair", 0.795),
+    ("plant", 0.767),
+    ("sofa", 0.909),
+    ("toilet", 0.965),
+    ("tv_monitor", 0.859),
+];
+
 #[test]
-fn held_out_val_auc_is_informative() {
+fn held_out_val_auc_beats_naive_bayes() {
     let Some(stats) = stats() else { return };
     let table = evaluate_prior(
         CooccurrencePrior::embedded(),
@@ -48,18 +93,32 @@ fn held_out_val_auc_is_informative() {
         Split::Val,
         &OBJECTNAV_CATEGORIES,
     );
+    // The tempered naive Bayes shipped before, built from the same train
+    // scenes and scored the same way.
+    let nb = CooccurrencePrior::build(&stats.regions, PriorBuildConfig::naive_bayes()).unwrap();
+    let nb_table = evaluate_prior(&nb, &stats.regions, Split::Val, &OBJECTNAV_CATEGORIES);
     let mut mean = 0.0;
     for (g, row) in &table {
         let auc = row.auc.unwrap();
+        let nb_auc = nb_table[g].auc.unwrap();
+        let baseline = ISSUE_BASELINE.iter().find(|(c, _)| c == g).unwrap().1;
         eprintln!(
-            "{g}: AUC {auc:.3} ({} positives, {} negatives)",
+            "{g}: AUC {auc:.3} (naive Bayes {nb_auc:.3}, issue baseline {baseline:.3}; {} positives, {} negatives)",
             row.positives, row.negatives
         );
-        // README figures; far above chance (0.5) for every category.
-        assert!(auc > 0.7, "{g}: {auc}");
+        // README figures: better than naive Bayes on every category.
+        assert!(auc > nb_auc, "{g}: {auc} <= naive Bayes {nb_auc}");
+        if g == "plant" {
+            // Not met: item 7 asks for > 0.767; the model reaches 0.752
+            // (naive Bayes 0.747). Guard the figure against regressions.
+            assert!(auc > 0.75, "{g}: {auc}");
+        } else {
+            assert!(auc > baseline, "{g}: {auc} <= issue baseline {baseline}");
+        }
         mean += auc / table.len() as f64;
     }
-    assert!(mean > 0.85, "mean AUC {mean}");
+    // Item 7 asks for >= 0.92; the model reaches 0.907 (naive Bayes 0.895).
+    assert!(mean > 0.905, "mean AUC {mean}");
 }
 
 #[test]
