@@ -267,8 +267,7 @@ fn main() -> Result<(), String> {
             );
             rss.push((r, s));
             let st = last.as_ref();
-            let missing: u64 =
-                st.map_or(0, |s| s.streams.values().map(|v| v.lost).sum());
+            let missing: u64 = st.map_or(0, |s| s.streams.values().map(|v| v.lost).sum());
             writeln!(
                 csv,
                 "{:.0},{r},{s},{requests},{confirmed},{},{},{},{},{missing}",
