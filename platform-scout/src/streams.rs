@@ -24,9 +24,9 @@
 //!   reassembly limit), nothing arrives to number: this is how it shows.
 //!
 //! The counts are in the status document ([`crate::bridge::Status::streams`]).
-//! Complexity: `O(log W + PERIOD_WINDOW)` per sample for `W` writers seen
-//! (at most [`MAX_WRITERS`]), `O(PERIOD_WINDOW log PERIOD_WINDOW)` per
-//! silence check.
+//! Complexity: `O(log W)` per sample for `W` writers remembered (at most
+//! [`MAX_WRITERS`]; `O(W)` for the sample that makes one too many), and
+//! `O(PERIOD_WINDOW log PERIOD_WINDOW)` per silence check and status.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Duration;
