@@ -24,9 +24,9 @@
 //!   reassembly limit), nothing arrives to number: this is how it shows.
 //!
 //! The counts are in the status document ([`crate::bridge::Status::streams`]).
-//! Complexity: `O(log W)` per sample for `W` writers remembered (at most
-//! [`MAX_WRITERS`]; `O(W)` for the sample that makes one too many), and
-//! `O(PERIOD_WINDOW log PERIOD_WINDOW)` per silence check and status.
+//! Complexity: `O(log W + PERIOD_WINDOW log PERIOD_WINDOW)` per sample for
+//! `W` writers remembered (at most [`MAX_WRITERS`]; `O(W)` more for the
+//! sample that makes one too many), `O(1)` per silence check and status.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::time::Duration;
@@ -107,6 +107,9 @@ pub struct StreamStatus {
 #[derive(Debug, Clone, Default)]
 pub struct StreamMonitor {
     intervals: VecDeque<f64>,
+    /// The median of `intervals`, updated when a sample arrives (silence
+    /// checks and status reads, which run far more often, only read it).
+    period: Option<f64>,
     last_arrival: Option<Duration>,
     /// Last sequence number taken per writer, with the arrival count when
     /// it was last seen (to forget the oldest writer first).
@@ -123,12 +126,7 @@ impl StreamMonitor {
     /// The period estimate between arrivals (s): the median of the last
     /// intervals, once [`MIN_INTERVALS`] are known.
     pub fn period_s(&self) -> Option<f64> {
-        if self.intervals.len() < MIN_INTERVALS {
-            return None;
-        }
-        let mut v: Vec<f64> = self.intervals.iter().copied().collect();
-        v.sort_by(f64::total_cmp);
-        Some(v[v.len() / 2])
+        self.period
     }
 
     /// A sample arrived at `now` (node clock) from `source` (`None` when
@@ -160,6 +158,11 @@ impl StreamMonitor {
                 self.intervals.pop_front();
             }
             self.intervals.push_back(dt);
+            if self.intervals.len() >= MIN_INTERVALS {
+                let mut v: Vec<f64> = self.intervals.iter().copied().collect();
+                v.sort_by(f64::total_cmp);
+                self.period = Some(v[v.len() / 2]);
+            }
         }
         self.last_arrival = Some(now);
         let Some(source) = source else {
