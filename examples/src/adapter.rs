@@ -305,6 +305,9 @@ pub struct SornavPolicy<F> {
     debug: bool,
     /// `SORNAV_DEBUG_ACTIONS` is set: log every action to stderr.
     debug_actions: bool,
+    /// `SORNAV_DEBUG_FRAMES` names a directory: every frame is written
+    /// there as two PNGs (labels in false colours, depth in grey).
+    debug_frames: Option<std::path::PathBuf>,
 }
 
 impl<F> std::fmt::Debug for SornavPolicy<F> {
@@ -355,6 +358,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
             trace: EpisodeTrace::default(),
             debug: std::env::var_os("SORNAV_DEBUG").is_some(),
             debug_actions: std::env::var_os("SORNAV_DEBUG_ACTIONS").is_some(),
+            debug_frames: std::env::var_os("SORNAV_DEBUG_FRAMES").map(std::path::PathBuf::from),
         }
     }
 
@@ -472,9 +476,9 @@ impl<F: AgentFactory> SornavPolicy<F> {
         let (waypoint, look_at) = (mission.waypoint, mission.look_at);
         let path = mission.path.clone().unwrap_or_default();
         self.mission = Some(id);
-        // Only an explored frontier is looked down at (a candidate is
-        // verified with a level camera).
-        self.look_at = look_at.filter(|_| matches!(mission.kind, MissionKind::Explore { .. }));
+        // An explored frontier or a drop edge is looked down at; a
+        // candidate is verified with a level camera.
+        self.look_at = look_at.filter(|_| !matches!(mission.kind, MissionKind::NavToObject { .. }));
         self.follower.set_goal(waypoint, look_at, path, step);
     }
 
@@ -636,6 +640,17 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
             self.trace.frame_ms.add(t.elapsed().as_secs_f64() * 1e3);
         }
         self.trace.trajectory.push(f32x3(&obs.position));
+        if let (Some(dir), Some(frame)) = (self.debug_frames.as_ref(), obs.frame) {
+            // Debugging aid: the frames the agent saw, as images.
+            for r in [
+                frame.save_png(&dir.join(format!("s{step:04}-labels.png"))),
+                frame.save_depth_png(&dir.join(format!("s{step:04}-depth.png")), 6.0),
+            ] {
+                if let Err(e) = r {
+                    eprintln!("SORNAV_DEBUG_FRAMES: {e}");
+                }
+            }
+        }
         let feet = self.to_local(&obs.position);
         self.pitch = obs.pitch;
         self.after_last_action(&feet, step);

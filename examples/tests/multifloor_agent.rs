@@ -249,3 +249,78 @@ fn finds_targets_on_the_other_floor() {
         "{ok} of {runs} cross-floor episodes succeeded"
     );
 }
+
+/// A start at the head of a switchback's descending flight (procedural
+/// house 2014 of `sornav-sim --scenes procedural:N`, three floors as the
+/// generator draws them; the robot stands on the middle floor at the top
+/// of the flight down, a stair up beside it). A level camera never sees
+/// the treads below the head (the flight descends about as steeply as the
+/// lowest ray), rays over the stairwell used to map it as free floor, and
+/// the agent declared its floor exhausted after the first look around, 26
+/// actions in, with no stair down mapped. Now it looks down through the
+/// floor's edge first (a drop edge within reach) and maps the flight down
+/// within its first 60 actions. (Whether it then searches the floor below
+/// or the one above first is the policy's choice, not asserted here.)
+#[test]
+fn a_start_at_the_head_of_a_stair_going_down_maps_the_flight() {
+    let sim = Simulator::new(
+        Scene::procedural(2014, &ProceduralConfig::default()).unwrap(),
+        SimConfig {
+            camera: CameraConfig {
+                width: 160,
+                height: 120,
+                ..CameraConfig::default()
+            },
+            ..SimConfig::default()
+        },
+    )
+    .unwrap();
+    let episodes = generate_episodes(
+        &sim,
+        &GeneratorConfig {
+            categories: vec!["plant".to_owned()],
+            episodes_per_category: 1,
+            seed: 7,
+            ..GeneratorConfig::default()
+        },
+    )
+    .unwrap();
+    let mut episode = episodes.into_iter().next().expect("a plant episode");
+    episode.start_position = nalgebra::Point3::new(1.42, 2.12, 2.15);
+    episode.start_yaw = (-28.0f64).to_radians();
+    sim.spawn(&episode).expect("the stair head is navigable");
+    let factory = ConfigFactory {
+        config: sim_agent_config(),
+        policy: None,
+    };
+    let mut policy = SornavPolicy::new(&factory, AdapterConfig::default());
+    let run = RunConfig {
+        max_actions: 60,
+        ..RunConfig::default()
+    };
+    let r = run_episode(&sim, &episode, &mut policy, &run).unwrap();
+    let trace = policy.take_trace();
+    let agent = policy.agent().expect("agent");
+    // Heights are relative to the start floor.
+    let down: Vec<_> = agent
+        .frontier_map()
+        .stairs()
+        .iter()
+        .filter(|s| s.lower.position.z < -0.5 && s.upper.position.z.abs() < 0.3)
+        .collect();
+    assert!(
+        !down.is_empty(),
+        "no stair down mapped after {} actions ({:?}, end: {}); stairs {:?}; last decisions {:?}",
+        r.actions,
+        r.outcome,
+        trace.agent_end,
+        agent
+            .frontier_map()
+            .stairs()
+            .iter()
+            .map(|s| (s.lower.position, s.upper.position))
+            .collect::<Vec<_>>(),
+        &trace.decisions.runs()[trace.decisions.runs().len().saturating_sub(4)..]
+    );
+    assert_ne!(trace.agent_end, "exhausted", "the floor is not exhausted");
+}

@@ -24,6 +24,7 @@ use sornav_tsp::HorizonPlan;
 use crate::approach::{ApproachTarget, ViewDemand, approach_waypoint};
 use crate::commitment;
 use crate::config::{AgentConfig, PolicyConfig};
+use crate::drop_edges::{DROP_LOOK_RADIUS_M, DropEdges};
 use crate::error::AgentError;
 use crate::observation::{Observation, ObservationReport, Sensor};
 use crate::ordering::{self, OrderingInput, Route};
@@ -167,9 +168,10 @@ const REVISIT_LIMIT: u32 = 3;
 /// frontier's viewpoint.
 const REVISIT_RADIUS_M: f64 = 0.4;
 
-/// A move of the exhaustion check: the path to the place to look from,
-/// and the viewpoint of the unreached frontier to look at.
-struct UnreachedLook {
+/// A move to look at something: the path to the place to look from, and
+/// the point to look at (the viewpoint of an unreached frontier, the floor
+/// at a drop edge).
+struct LookMove {
     path: Vec<Point3<f64>>,
     at: Point3<f64>,
 }
@@ -182,6 +184,54 @@ const UNREACHED_LOOK_LIMIT: u32 = 3;
 /// traversable place to look at it from is sought; a frontier within this
 /// distance of one already looked at is not looked at again.
 const UNREACHED_LOOK_RADIUS_M: f64 = 1.5;
+
+/// Most looks down into drop edges per target before the floor is
+/// declared exhausted (see `Agent::drop_look`).
+const DROP_LOOK_LIMIT: u32 = 4;
+
+/// Most looks down into deep drop edges near the robot per target while it
+/// explores (see `Agent::drop_look`).
+const NEAR_LOOK_LIMIT: u32 = 3;
+
+/// A drop edge near the robot is looked into while exploring only when a
+/// return this far (m) under the floor was seen through it: a stairwell
+/// going down a storey, not ground outside a window or the floor beside a
+/// step the robot stands on.
+const DEEP_DROP_M: f64 = 1.0;
+
+/// Longest time (s) the robot stands at a drop edge waiting for a view
+/// down into it (turning to it and tilting its camera take a few steps).
+const DROP_LOOK_TIME: Duration = Duration::from_secs(4);
+
+/// A look down through a drop edge (see `Agent::drop_look`).
+#[derive(Debug, Clone, Copy)]
+struct DropLook {
+    /// Where the floor ends before the drop edge: the point looked at.
+    edge: Point3<f64>,
+    /// Where the robot looks from.
+    place: Point3<f64>,
+    /// The mission taking the robot there (none before its dispatch).
+    mission: Option<MissionId>,
+    /// When the robot first stood at the place.
+    since: Option<Duration>,
+}
+
+/// Unseen drop edges within this distance (m) of the robot are looked
+/// into before it explores on: a stair going down from where the robot
+/// stands (a start at a stair's head) is otherwise walked onto unmapped.
+const DROP_NEAR_M: f64 = 2.0;
+
+/// How far (m) back from where the floor ends before a drop edge, toward
+/// where the sensor stood when it saw the edge, the robot stands to look
+/// down through it.
+const DROP_LOOK_STANDOFF_M: f64 = 0.4;
+
+/// Arrival radius (m) of a look's retreat mission.
+const DROP_LOOK_ARRIVAL_M: f64 = 0.3;
+
+/// How far (m) under a drop edge the robot is told to look: deep enough
+/// that a platform with a tiltable camera looks down at it.
+const DROP_LOOK_BELOW_M: f64 = 1.5;
 
 /// How long the robot stands at a reached frontier before it is excluded
 /// (two control steps at 2 Hz: time to look at it).
@@ -241,6 +291,15 @@ pub struct Agent {
     looked_at: Vec<Point3<f64>>,
     /// Attempts of the exhaustion check so far (see `unreached_look`).
     unreached_looks: u32,
+    /// Where the robot saw through its floor (see [`DropEdges`]).
+    drop_edges: DropEdges,
+    /// Looks down into drop edges before exhaustion so far (see
+    /// `drop_look`).
+    drop_looks: u32,
+    /// Looks down into deep drop edges near the robot so far.
+    near_looks: u32,
+    /// The look down through a drop edge under way.
+    drop_look: Option<DropLook>,
     /// The robot walked back along its trail since it last stood on a
     /// known floor (a second time it is exhausted instead).
     walked_back: bool,
@@ -539,6 +598,10 @@ impl Agent {
             looking_around: 0,
             looked_at: Vec::new(),
             unreached_looks: 0,
+            drop_edges: DropEdges::default(),
+            drop_looks: 0,
+            near_looks: 0,
+            drop_look: None,
             walked_back: false,
             relocation: None,
             last_outcome: None,
@@ -679,6 +742,9 @@ impl Agent {
         self.relocation = None;
         self.stairs_retried = false;
         self.stop_moves = 0;
+        self.drop_looks = 0;
+        self.near_looks = 0;
+        self.drop_look = None;
         let state = self.target.insert(TargetState { target, gate });
         Ok(&state.target)
     }
@@ -737,6 +803,21 @@ impl Agent {
                 return Err(e.into());
             }
         };
+        // Where the scan saw through the floor (a stairwell going down).
+        if let Some(level) = self.frontiers.level_at(observation.pose.position.z)
+            && let Some((floor_z, drop_depth)) = self
+                .frontiers
+                .level_map(level)
+                .map(|m| (m.config().grid.floor_z, m.config().grid.drop_off_depth))
+        {
+            self.drop_edges.record(
+                level,
+                &origin,
+                &points[..sensor_points as usize],
+                floor_z,
+                drop_depth,
+            );
+        }
         let stats = match &observation.sensor {
             Sensor::Depth(d) => Some(self.semantic.integrate_depth(
                 &DepthFrame {
@@ -1516,8 +1597,24 @@ impl Agent {
                     }
                     _ => unreachable!("matched above"),
                 };
-                match explore {
-                    Some(mission) if !active.is_some_and(|(_, k)| k == mission.kind) => self
+                let looking = self
+                    .drop_look
+                    .is_some_and(|l| l.mission.is_some() && l.mission == active.map(|(id, _)| id));
+                let near_look = if looking || self.current_level().is_none() {
+                    None
+                } else {
+                    self.drop_look(now, pose, Some(DROP_NEAR_M))?
+                };
+                match (explore, near_look) {
+                    _ if looking => self.keep_going(
+                        now,
+                        step,
+                        format!("looking down through the floor's edge ({reason})"),
+                    ),
+                    (_, Some(LookMove { path, at })) => {
+                        self.dispatch_drop_look(now, step, path, at, &reason)?
+                    }
+                    (Some(mission), None) if !active.is_some_and(|(_, k)| k == mission.kind) => self
                         .dispatch_as(
                             now,
                             step,
@@ -1526,8 +1623,8 @@ impl Agent {
                             DecisionAction::Explore,
                             reason,
                         )?,
-                    Some(_) => self.keep_going(now, step, reason),
-                    None if active.is_none() && self.current_level().is_none() => {
+                    (Some(_), None) => self.keep_going(now, step, reason),
+                    (None, None) if active.is_none() && self.current_level().is_none() => {
                         // Between floors (on a stair, or on a floor not
                         // recognised yet): nothing is known to be
                         // exhausted. Go back to where the map last gave
@@ -1540,6 +1637,7 @@ impl Agent {
                                     now,
                                     step,
                                     vec![pose.position, back],
+                                    None,
                                     format!("no reachable frontier off a known floor: back to the last place with one ({reason})"),
                                 )?
                             }
@@ -1559,19 +1657,38 @@ impl Agent {
                             _ => self.walk_back(now, step, pose, &reason)?,
                         }
                     }
-                    None if active.is_none() && self.retry_stairs() => self.keep_going(
+                    (None, None) if active.is_none() && self.retry_stairs() => self.keep_going(
                         now,
                         step,
                         format!(
                             "floor exhausted: retrying the excluded stair ends once ({reason})"
                         ),
                     ),
-                    None if active.is_none() && self.unreached_look_allowed() => {
-                        match self.unreached_look(pose)? {
-                            Some(UnreachedLook { path, at }) => self.retreat(
+                    (None, None) if active.is_none()
+                        && (self.drop_looks < DROP_LOOK_LIMIT || self.drop_look.is_some()) =>
+                    {
+                        match self.drop_look(now, pose, None)? {
+                            Some(LookMove { path, at }) => self.dispatch_drop_look(
                                 now,
                                 step,
                                 path,
+                                at,
+                                &format!("no reachable frontier; {reason}"),
+                            )?,
+                            None => self.keep_going(
+                                now,
+                                step,
+                                format!("no reachable frontier and no drop edge left to look into ({reason})"),
+                            ),
+                        }
+                    }
+                    (None, None) if active.is_none() && self.unreached_look_allowed() => {
+                        match self.unreached_look(pose)? {
+                            Some(LookMove { path, at }) => self.retreat(
+                                now,
+                                step,
+                                path,
+                                None,
                                 format!(
                                     "no reachable frontier: looking at the unreached frontier at ({:.1}, {:.1}) from the nearest reachable place ({reason})",
                                     at.x, at.y
@@ -1584,7 +1701,7 @@ impl Agent {
                             ),
                         }
                     }
-                    None if active.is_none() => {
+                    (None, None) if active.is_none() => {
                         self.decide(
                             now,
                             step,
@@ -1599,7 +1716,7 @@ impl Agent {
                             AgentCommand::FloorExhausted { stairs }
                         }
                     }
-                    None => self.keep_going(
+                    (None, None) => self.keep_going(
                         now,
                         step,
                         format!("no reachable frontier; finishing the active mission ({reason})"),
@@ -1632,7 +1749,7 @@ impl Agent {
     ///
     /// # Complexity
     /// O(n) over the n frontiers, plus up to eight shortest-path searches.
-    fn unreached_look(&mut self, pose: &RobotPose) -> Result<Option<UnreachedLook>, AgentError> {
+    fn unreached_look(&mut self, pose: &RobotPose) -> Result<Option<LookMove>, AgentError> {
         self.unreached_looks += 1;
         let Some(level) = self.current_level() else {
             return Ok(None);
@@ -1664,19 +1781,41 @@ impl Agent {
             return Ok(None);
         };
         self.looked_at.push(at);
+        Ok(self
+            .path_to_place_near(level, &feet, &at, UNREACHED_LOOK_RADIUS_M)?
+            .map(|path| LookMove { path, at }))
+    }
+
+    /// The path from `feet` to the reachable traversable place of `level`
+    /// nearest to `at` within `radius` (and further than half a metre from
+    /// the robot): up to eight places are tried, nearest first, each at
+    /// least 0.3 m from the ones tried before (the cells right next to an
+    /// unreached place are most often unreached too). `Ok(None)` when none
+    /// has a path.
+    ///
+    /// # Complexity
+    /// O((radius / resolution)^2) cells plus up to eight shortest-path
+    /// searches.
+    fn path_to_place_near(
+        &mut self,
+        level: LevelId,
+        feet: &Point3<f64>,
+        at: &Point3<f64>,
+        radius: f64,
+    ) -> Result<Option<Vec<Point3<f64>>>, AgentError> {
         let Some(level_map) = self.frontiers.level_map(level) else {
             return Ok(None);
         };
         let grid = level_map.grid();
         let floor = level_map.config().grid.floor_z;
         let step = grid.resolution().max(0.05);
-        let n = (UNREACHED_LOOK_RADIUS_M / step).ceil() as i64;
+        let n = (radius / step).ceil() as i64;
         let mut places: Vec<(f64, Point3<f64>)> = Vec::new();
         for i in -n..=n {
             for j in -n..=n {
                 let p = Point2::new(at.x + i as f64 * step, at.y + j as f64 * step);
                 let d = (p - at.xy()).norm();
-                if d > UNREACHED_LOOK_RADIUS_M || (p - feet.xy()).norm() <= 0.5 {
+                if d > radius || (p - feet.xy()).norm() <= 0.5 {
                     continue;
                 }
                 if grid.cell_of(&p).is_ok_and(|c| grid.is_traversable(c)) {
@@ -1685,9 +1824,6 @@ impl Agent {
             }
         }
         places.sort_by(|a, b| a.0.total_cmp(&b.0));
-        // Up to eight places, nearest first, each at least 0.3 m from the
-        // ones tried before (the cells right next to an unreached frontier
-        // are most often unreached too).
         let mut tried: Vec<Point3<f64>> = Vec::new();
         for (_, p) in places {
             if tried.len() >= 8 {
@@ -1697,34 +1833,224 @@ impl Agent {
                 continue;
             }
             tried.push(p);
-            if let Some(edge) = self.frontiers.path(&feet, &p)? {
-                return Ok(Some(UnreachedLook {
-                    path: edge.path,
-                    at,
-                }));
+            if let Some(edge) = self.frontiers.path(feet, &p)? {
+                return Ok(Some(edge.path));
             }
         }
         Ok(None)
     }
 
+    /// Looks down through drop edges (see [`DropEdges`]): a stair going
+    /// down is seen only from its head, looking down. Only for a robot
+    /// that climbs stairs (`frontier.levels.allow_stairs`). Used before the
+    /// floor is declared exhausted (`within` = `None`: any unseen edge of
+    /// the robot's level, up to [`DROP_LOOK_LIMIT`] looks per target) and,
+    /// while exploring, for deep edges ([`DEEP_DROP_M`]) within
+    /// [`DROP_NEAR_M`] of the robot (`within` = that distance, up to
+    /// [`NEAR_LOOK_LIMIT`] looks per target).
+    ///
+    /// While a look is under way and the robot stands at its place, the
+    /// same place is returned again until [`DROP_LOOK_TIME`] has passed
+    /// there (facing the edge and tilting a camera take a few steps). Otherwise the nearest
+    /// unseen edge not looked into yet (edges within
+    /// [`DROP_LOOK_RADIUS_M`] of an earlier look count as looked into)
+    /// whose place to look from is reachable: [`DROP_LOOK_STANDOFF_M`]
+    /// back from the edge toward where the sensor saw it from (the robot's
+    /// own position when that is within half a metre), else the reachable
+    /// place nearest to the edge within [`DROP_LOOK_RADIUS_M`]. Each new
+    /// edge counts as one look; with no edge left, the exhaustion check's
+    /// looks end. Returns the
+    /// path to the place and the point to look at.
+    ///
+    /// # Complexity
+    /// O(B log B) over the B drop-edge bins, plus up to six place searches
+    /// ([`Self::path_to_place_near`]).
+    fn drop_look(
+        &mut self,
+        now: Duration,
+        pose: &RobotPose,
+        within: Option<f64>,
+    ) -> Result<Option<LookMove>, AgentError> {
+        let exhausting = within.is_none();
+        // A robot that cannot climb stairs has no use for a stair going
+        // down (the single-floor variant, a wheeled base).
+        let climbs = self.config.frontier.levels.allow_stairs;
+        let Some(level) = self.current_level().filter(|_| climbs) else {
+            if exhausting {
+                self.drop_looks = DROP_LOOK_LIMIT;
+            }
+            return Ok(None);
+        };
+        let feet = pose.position;
+        if let Some(look) = self.drop_look.take() {
+            let there = (look.place.xy() - feet.xy()).norm() <= REVISIT_RADIUS_M
+                && (look.place.z - feet.z).abs() <= REVISIT_RADIUS_M;
+            let since = look.since.unwrap_or(now);
+            if there && now.saturating_sub(since) < DROP_LOOK_TIME {
+                self.drop_look = Some(DropLook {
+                    mission: None,
+                    since: Some(since),
+                    ..look
+                });
+                return Ok(Some(LookMove {
+                    path: vec![feet, look.place],
+                    at: look.edge,
+                }));
+            }
+        }
+        let (used, limit) = if exhausting {
+            (self.drop_looks, DROP_LOOK_LIMIT)
+        } else {
+            (self.near_looks, NEAR_LOOK_LIMIT)
+        };
+        if used >= limit {
+            return Ok(None);
+        }
+        let unseen: Vec<_> = self
+            .drop_edges
+            .unseen(level, &feet.xy())
+            .into_iter()
+            .filter(|e| {
+                within.is_none_or(|r| {
+                    (e.at.xy() - feet.xy()).norm() <= r && e.max_depth >= DEEP_DROP_M
+                })
+            })
+            .take(6)
+            .collect();
+        if unseen.is_empty() {
+            if exhausting {
+                self.drop_looks = DROP_LOOK_LIMIT;
+            }
+            return Ok(None);
+        }
+        for edge in unseen {
+            self.drop_edges.mark_looked(level, &edge.at);
+            // The floor ends somewhere between where the sensor stood and
+            // the edge point (where the ray passed the floor's height): at
+            // the last mapped floor surface on the way back.
+            let (floor_end, back) = self.floor_end(&edge.at, &edge.from);
+            let near = floor_end + back * DROP_LOOK_STANDOFF_M;
+            let path = if (near - feet.xy()).norm() <= 0.5 {
+                Some(vec![feet])
+            } else {
+                let near = Point3::new(near.x, near.y, edge.at.z);
+                match self.path_to_place_near(level, &feet, &near, 0.5)? {
+                    Some(p) => Some(p),
+                    None => self.path_to_place_near(level, &feet, &edge.at, DROP_LOOK_RADIUS_M)?,
+                }
+            };
+            if let Some(path) = path
+                && let Some(&place) = path.last()
+            {
+                let look = Point3::new(floor_end.x, floor_end.y, edge.at.z);
+                if exhausting {
+                    self.drop_looks += 1;
+                } else {
+                    self.near_looks += 1;
+                }
+                self.drop_look = Some(DropLook {
+                    edge: look,
+                    place,
+                    mission: None,
+                    since: None,
+                });
+                return Ok(Some(LookMove { path, at: look }));
+            }
+        }
+        Ok(None)
+    }
+
+    /// Where the floor ends on the way from the drop edge point `at` back
+    /// to `from` (where the sensor stood when it saw it): the first
+    /// position, in 0.1 m steps from `at`, whose surface column holds a
+    /// walkable surface within 0.1 m of `at`'s height (the floor); `from`
+    /// when none does. Also the unit direction toward `from` (zero when
+    /// the two coincide).
+    ///
+    /// # Complexity
+    /// O(d / 0.1) surface-column look-ups for the distance d.
+    fn floor_end(
+        &self,
+        at: &Point3<f64>,
+        from: &Point2<f64>,
+    ) -> (Point2<f64>, nalgebra::Vector2<f64>) {
+        let start = at.xy();
+        let d = from - start;
+        let len = d.norm();
+        if len <= 1e-6 {
+            return (start, nalgebra::Vector2::zeros());
+        }
+        let dir = d / len;
+        let steps = (len / 0.1).ceil() as usize;
+        for i in 0..=steps {
+            let p = start + dir * (i as f64 * 0.1).min(len);
+            if self
+                .frontiers
+                .surfaces_at(p.x, p.y)
+                .iter()
+                .any(|h| (h - at.z).abs() <= 0.1)
+            {
+                return (p, dir);
+            }
+        }
+        (*from, dir)
+    }
+
+    /// Dispatches the look of [`Self::drop_look`]: a retreat along `path`
+    /// facing a point [`DROP_LOOK_BELOW_M`] under the edge `at` (a
+    /// platform that can tilt its camera looks down there).
+    fn dispatch_drop_look(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        path: Vec<Point3<f64>>,
+        at: Point3<f64>,
+        reason: &str,
+    ) -> Result<AgentCommand, AgentError> {
+        let cmd = self.retreat(
+            now,
+            step,
+            path,
+            Some(Point3::new(at.x, at.y, at.z - DROP_LOOK_BELOW_M)),
+            format!(
+                "looking down through the floor's edge at ({:.1}, {:.1}): a stair going down is only seen from its head ({reason})",
+                at.x, at.y
+            ),
+        )?;
+        if let (AgentCommand::Dispatch { id, .. }, Some(look)) = (&cmd, self.drop_look.as_mut()) {
+            look.mission = Some(*id);
+        }
+        Ok(cmd)
+    }
+
     /// Dispatches a retreat (a relocation outside any cluster) along
-    /// `path` to its last point.
+    /// `path` to its last point, facing `look_at` there when given (a
+    /// platform that can tilt its camera looks down at a point below its
+    /// view).
     fn retreat(
         &mut self,
         now: Duration,
         step: DecisionStep,
         path: Vec<Point3<f64>>,
+        look_at: Option<Point3<f64>>,
         reason: String,
     ) -> Result<AgentCommand, AgentError> {
         let Some(&back) = path.last() else {
             return Ok(self.keep_going(now, step, reason));
         };
-        let mission = Mission::new(
+        let mut mission = Mission::new(
             MissionKind::Relocate {
                 cluster: ExecClusterId(u64::MAX),
             },
             back,
         );
+        if let Some(look) = look_at {
+            // A look needs the robot at its place, not anywhere within a
+            // relocation's arrival radius.
+            mission = mission
+                .with_look_at(look)
+                .with_arrival_radius(DROP_LOOK_ARRIVAL_M);
+        }
         self.dispatch_as(now, step, mission, path, DecisionAction::Retreat, reason)
     }
 
@@ -1749,6 +2075,7 @@ impl Agent {
                     now,
                     step,
                     path,
+                    None,
                     format!("nothing reachable off a known floor after looking around: back along the trail to the last floor ({reason})"),
                 )
             }

@@ -152,6 +152,7 @@ mod agent;
 mod approach;
 mod commitment;
 mod config;
+mod drop_edges;
 mod error;
 mod observation;
 mod ordering;
