@@ -172,6 +172,37 @@ impl Frame {
         Some(self.pose.position + (f + r * a + up * b) * z)
     }
 
+    /// Writes the depth image as a grey PNG, for debugging: near is
+    /// light, `far` metres and beyond are dark, no return is black.
+    ///
+    /// # Errors
+    /// [`RenderError::Io`] when the file cannot be written.
+    pub fn save_depth_png(&self, path: &std::path::Path, far: f32) -> Result<(), RenderError> {
+        let far = if far.is_finite() && far > 0.0 {
+            far
+        } else {
+            1.0
+        };
+        let data: Vec<u8> = self
+            .depth
+            .iter()
+            .flat_map(|&z| {
+                let g = if z.is_finite() && z > 0.0 {
+                    // 255 at the camera down to 32 at `far`; the cast
+                    // saturates.
+                    (255.0 - 223.0 * (z / far).min(1.0)) as u8
+                } else {
+                    0
+                };
+                [g; 3]
+            })
+            .collect();
+        crate::write_rgb_png(path, self.width, self.height, &data).map_err(|e| RenderError::Io {
+            path: path.to_path_buf(),
+            message: e.to_string(),
+        })
+    }
+
     /// Writes the RGB image (or, without one, the instance image in false
     /// colours) as a PNG; for figures and debugging.
     ///
