@@ -1,0 +1,710 @@
+//! Exploration complete before "exhausted" (issue 20, item 3): on every
+//! shared Sweet Home 3D home, the real agent exploring with no findable
+//! target leaves no reachable unknown area larger than 1 m² on its start
+//! floor.
+//!
+//! # Set-up
+//! * **Homes**: the six homes of `../shared/data/sh3d-homes/homes`
+//!   (skipped with a message when the shared data is missing, a failure
+//!   when `CI=true`: `sornav_test_support::shared_data`).
+//! * **Starts** (deterministic): on every level of the simulator's height
+//!   field ([`NavMesh::levels`]), for every connected piece of the
+//!   level's floor of at least [`MIN_PIECE_M2`] (4 m²), the floor span
+//!   nearest to the piece's centroid and [`RANDOM_STARTS`] (2) spans
+//!   drawn with a seeded generator ([`SEED`]), all within
+//!   [`START_HEIGHT_TOLERANCE`] of the level's elevation (on the floor,
+//!   not on a stair step), heading +x: 30 starts over the six homes.
+//! * **Agent**: [`SornavPolicy`] with [`sim_agent_config`] (stairs
+//!   allowed, as in `sornav-sim`), 160 x 120 camera, in [`Simulator`]
+//!   under [`run_episode`] (no wall-clock limit, so that the outcome does
+//!   not depend on the machine's load). The target is a category added to
+//!   the agent's vocabulary that no pixel carries ([`ABSENT`]): nothing
+//!   can be found, so the agent explores until it declares the search
+//!   exhausted (`exhausted` end: after the adapter's last full turn) or
+//!   runs out of the [`BUDGET`] of 1500 actions.
+//!
+//! # Criterion
+//! Ground truth: the simulator's walkable spans of the start's level
+//! reachable from the start over the height field without leaving the
+//! level's height window (`|z - elevation| <= LEVEL_HALF_HEIGHT`, so
+//! stair flights beyond the floor's window are left out). A reachable span
+//! whose column centre lies in a cell that the agent's own grid of its
+//! start floor (`agent.frontier_map().level_map(LevelId(0))`) calls
+//! [`CellState::Unknown`] is *unknown*; unknown spans are grouped into
+//! 8-connected components over the height field's 0.05 m columns. A run
+//! passes when the agent ended `exhausted` (not by the budget) and no
+//! component exceeds [`MAX_UNKNOWN_M2`] (1 m²). Every run prints the
+//! actions used, how the agent ended, the reachable area, the known share
+//! and the largest unknown components (area and centroid), so that a
+//! failure can be located.
+//!
+//! Runs use all cores (threads over the starts); about a minute on two
+//! loaded cores in the dev profile. The starts where today's agent fails
+//! are listed in [`KNOWN_FAILURES`] and run by the ignored
+//! [`known_incomplete_explorations`], whose doc comment gives the
+//! figures and causes.
+
+use std::path::Path;
+use std::sync::Mutex;
+use std::time::Instant;
+
+use nalgebra::{Point2, Point3};
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use sornav::frontier_graph::{CellState, LevelId};
+use sornav::{Agent, AgentError, LabelEntry};
+use sornav_examples::adapter::{
+    AdapterConfig, AgentFactory, ConfigFactory, EpisodeTrace, SornavPolicy, sim_agent_config,
+};
+use sornav_platform_sim::levels::LEVEL_HALF_HEIGHT;
+use sornav_platform_sim::{
+    CameraConfig, Episode, NavMesh, ObjectGoal, RunConfig, Scene, SimConfig, Simulator, SpanId,
+    ViewPoint, run_episode,
+};
+
+/// The target: a category no instance of any home carries.
+const ABSENT: &str = "no_such_object";
+/// Action budget per home (scan turns included).
+const BUDGET: usize = 1500;
+/// Largest reachable unknown component allowed (m²).
+const MAX_UNKNOWN_M2: f64 = 1.0;
+/// Connected pieces of a floor smaller than this (m²) get no start.
+const MIN_PIECE_M2: f64 = 4.0;
+/// Seeded random starts per piece, besides the one nearest its centroid.
+const RANDOM_STARTS: usize = 2;
+/// Starts lie within this height (m) of their level's elevation.
+const START_HEIGHT_TOLERANCE: f64 = 0.1;
+/// Seed of the random starts.
+const SEED: u64 = 20;
+
+/// Builds the simulator agent with one more category, [`ABSENT`], that no
+/// pixel is ever labelled with.
+struct AbsentTargetFactory(ConfigFactory);
+
+impl AgentFactory for AbsentTargetFactory {
+    fn build(&self, labels: &[LabelEntry]) -> Result<Agent, AgentError> {
+        let mut labels = labels.to_vec();
+        let id = labels.iter().map(|l| l.id).max().unwrap_or(0) + 1;
+        labels.push(LabelEntry {
+            id,
+            name: ABSENT.to_owned(),
+            ignored: false,
+        });
+        self.0.build(&labels)
+    }
+}
+
+/// One unknown component.
+#[derive(Debug, Clone)]
+struct Component {
+    area_m2: f64,
+    centroid: Point2<f64>,
+}
+
+/// What one home's run measured.
+#[derive(Debug, Clone)]
+struct HomeResult {
+    home: String,
+    label: String,
+    start: Point3<f64>,
+    actions: usize,
+    end: String,
+    reachable_m2: f64,
+    known_share: f64,
+    /// Unknown components, largest first.
+    unknown: Vec<Component>,
+    wall_s: f64,
+}
+
+impl HomeResult {
+    fn largest_m2(&self) -> f64 {
+        self.unknown.first().map_or(0.0, |c| c.area_m2)
+    }
+
+    fn passes(&self) -> bool {
+        self.end == "exhausted" && self.largest_m2() <= MAX_UNKNOWN_M2
+    }
+
+    fn report(&self) -> String {
+        let comps: Vec<String> = self
+            .unknown
+            .iter()
+            .take(4)
+            .map(|c| {
+                format!(
+                    "{:.2} m² at ({:.2}, {:.2})",
+                    c.area_m2, c.centroid.x, c.centroid.y
+                )
+            })
+            .collect();
+        format!(
+            "{} ({}): start ({:.2}, {:.2}, {:.2}), {} actions, end {:?}, reachable {:.1} m², known {:.1} %, \
+             largest unknown components [{}] ({:.0} s)",
+            self.home,
+            self.label,
+            self.start.x,
+            self.start.y,
+            self.start.z,
+            self.actions,
+            self.end,
+            self.reachable_m2,
+            100.0 * self.known_share,
+            comps.join(", "),
+            self.wall_s
+        )
+    }
+}
+
+/// A start pose of a run: the level it is on (index into
+/// [`NavMesh::levels`]), that level's elevation, the feet position.
+#[derive(Debug, Clone)]
+struct Start {
+    level: usize,
+    elevation: f64,
+    position: Point3<f64>,
+    label: String,
+}
+
+/// The floor spans of `level` within its height window.
+fn level_floor(nav: &NavMesh, level: usize, elevation: f64, s: SpanId) -> bool {
+    nav.span_level(s) == Some(level)
+        && nav.is_floor_span(s)
+        && (f64::from(nav.spans()[s as usize].floor) - elevation).abs() <= LEVEL_HALF_HEIGHT
+}
+
+/// The starts of a home (see the module docs): per level, per connected
+/// piece of its floor of at least [`MIN_PIECE_M2`], the span nearest to
+/// the piece's centroid and [`RANDOM_STARTS`] seeded random spans.
+fn starts_of(nav: &NavMesh, seed: u64) -> Vec<Start> {
+    let cs = nav.config().cell_size;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut out = Vec::new();
+    for (level, l) in nav.levels().iter().enumerate() {
+        let keep = |s: SpanId| level_floor(nav, level, l.elevation, s);
+        let mut seen = vec![false; nav.span_count()];
+        for s in 0..nav.span_count() as SpanId {
+            if seen[s as usize] || !keep(s) {
+                continue;
+            }
+            let piece = flood(nav, s, &keep, &mut seen);
+            if (piece.len() as f64) * cs * cs < MIN_PIECE_M2 {
+                continue;
+            }
+            let n = piece.len() as f64;
+            let c = piece.iter().fold(Point2::origin(), |a: Point2<f64>, &s| {
+                a + nav.span_center(s).xy().coords / n
+            });
+            // Starts on the floor itself, not on a stair step or landing
+            // inside the level's window.
+            let piece: Vec<SpanId> = piece
+                .into_iter()
+                .filter(|&s| {
+                    (f64::from(nav.spans()[s as usize].floor) - l.elevation).abs()
+                        <= START_HEIGHT_TOLERANCE
+                })
+                .collect();
+            let pieces =
+                out.iter().filter(|s: &&Start| s.level == level).count() / (1 + RANDOM_STARTS);
+            let Some(centre) = piece
+                .iter()
+                .map(|&s| nav.span_center(s))
+                .min_by(|a, b| (a.xy() - c).norm().total_cmp(&(b.xy() - c).norm()))
+            else {
+                continue;
+            };
+            out.push(Start {
+                level,
+                elevation: l.elevation,
+                position: centre,
+                label: format!("level {level} piece {pieces} centre"),
+            });
+            for k in 0..RANDOM_STARTS {
+                let s = piece[rng.random_range(0..piece.len())];
+                out.push(Start {
+                    level,
+                    elevation: l.elevation,
+                    position: nav.span_center(s),
+                    label: format!("level {level} piece {pieces} random {k}"),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// Spans connected to `from` over the height field's links among those
+/// `keep` accepts (marking them in `seen`).
+fn flood(
+    nav: &NavMesh,
+    from: SpanId,
+    keep: &dyn Fn(SpanId) -> bool,
+    seen: &mut [bool],
+) -> Vec<SpanId> {
+    let mut out = vec![from];
+    seen[from as usize] = true;
+    let mut i = 0;
+    while i < out.len() {
+        let s = out[i];
+        i += 1;
+        for &m in &nav.spans()[s as usize].neighbours {
+            if m != u32::MAX && !seen[m as usize] && keep(m) {
+                seen[m as usize] = true;
+                out.push(m);
+            }
+        }
+    }
+    out
+}
+
+/// Loads a home into the simulator (160 x 120 camera).
+fn simulator(home: &Path, models: &Path) -> Simulator {
+    let scene =
+        Scene::from_home_xml(home, models).unwrap_or_else(|e| panic!("{}: {e}", home.display()));
+    Simulator::new(
+        scene,
+        SimConfig {
+            camera: CameraConfig {
+                width: 160,
+                height: 120,
+                ..CameraConfig::default()
+            },
+            ..SimConfig::default()
+        },
+    )
+    .unwrap()
+}
+
+/// Whether the agent may take stairs: yes, as in `sim_agent_config`,
+/// unless `SORNAV_EC_NO_STAIRS` is set (a robot kept on its floor).
+fn allow_stairs() -> bool {
+    std::env::var_os("SORNAV_EC_NO_STAIRS").is_none()
+}
+
+/// Runs the agent in `sim` from `start` and measures its start floor's map.
+fn explore(sim: &Simulator, name: &str, start: &Start) -> HomeResult {
+    let t0 = Instant::now();
+    let nav = sim.nav();
+    let p = start.position;
+    // A placeholder goal at the start: run_episode needs a view point; the
+    // agent never looks for it (its target is ABSENT).
+    let episode = Episode {
+        episode_id: format!("{name}-{}", start.label),
+        scene_id: name.to_owned(),
+        start_position: p,
+        start_yaw: 0.0,
+        object_category: ABSENT.to_owned(),
+        goals: vec![ObjectGoal {
+            object_id: u64::MAX,
+            object_name: None,
+            category: ABSENT.to_owned(),
+            position: p,
+            view_points: vec![ViewPoint {
+                position: p,
+                yaw: 0.0,
+                iou: None,
+            }],
+        }],
+        geodesic_distance: None,
+        euclidean_distance: None,
+        closest_goal_object_id: None,
+        cross_floor: None,
+    };
+    let mut config = sim_agent_config();
+    config.frontier.levels.allow_stairs = allow_stairs();
+    let factory = AbsentTargetFactory(ConfigFactory {
+        config,
+        policy: None,
+    });
+    let mut policy = SornavPolicy::new(factory, AdapterConfig::default());
+    let run = RunConfig {
+        max_actions: BUDGET,
+        wall_clock_s: f64::INFINITY,
+        ..RunConfig::default()
+    };
+    let r = run_episode(sim, &episode, &mut policy, &run).unwrap();
+    let trace = policy.take_trace();
+    assert!(
+        trace.errors.is_empty(),
+        "{name}: agent errors {:?}",
+        trace.errors
+    );
+    let agent = policy.agent().expect("the agent was built");
+    let grid = agent
+        .frontier_map()
+        .level_map(LevelId(0))
+        .expect("the start floor's map")
+        .grid();
+    // Ground truth: the start level's spans reachable from the start
+    // within the level's height window.
+    let start_span = nav.span_at(&p).expect("the start is navigable");
+    let on_floor = |s: SpanId| {
+        nav.span_level(s) == Some(start.level)
+            && (f64::from(nav.spans()[s as usize].floor) - start.elevation).abs()
+                <= LEVEL_HALF_HEIGHT
+    };
+    let mut seen = vec![false; nav.span_count()];
+    let reachable = flood(nav, start_span, &on_floor, &mut seen);
+    let cs = nav.config().cell_size;
+    // The agent's z is measured from the start floor: only x, y are compared.
+    let unknown = |s: SpanId| {
+        let c = nav.span_center(s);
+        grid.cell_of(&Point2::new(c.x, c.y))
+            .map_or(true, |cell| grid.state(cell) == CellState::Unknown)
+    };
+    let (w, h) = nav.grid_size();
+    let mut mask = vec![false; w * h];
+    let mut n_unknown = 0usize;
+    for &s in &reachable {
+        if unknown(s) {
+            let (x, y) = nav.span_cell(s);
+            mask[y * w + x] = true;
+            n_unknown += 1;
+        }
+    }
+    let origin = nav.origin();
+    let mut components = Vec::new();
+    for first in 0..mask.len() {
+        if !mask[first] {
+            continue;
+        }
+        mask[first] = false;
+        let mut stack = vec![first];
+        let (mut n, mut sx, mut sy) = (0usize, 0.0, 0.0);
+        while let Some(i) = stack.pop() {
+            let (x, y) = (i % w, i / w);
+            n += 1;
+            sx += origin.x + (x as f64 + 0.5) * cs;
+            sy += origin.y + (y as f64 + 0.5) * cs;
+            for dy in -1i64..=1 {
+                for dx in -1i64..=1 {
+                    let (nx, ny) = (x as i64 + dx, y as i64 + dy);
+                    if nx < 0 || ny < 0 || nx >= w as i64 || ny >= h as i64 {
+                        continue;
+                    }
+                    let j = ny as usize * w + nx as usize;
+                    if mask[j] {
+                        mask[j] = false;
+                        stack.push(j);
+                    }
+                }
+            }
+        }
+        components.push(Component {
+            area_m2: n as f64 * cs * cs,
+            centroid: Point2::new(sx / n as f64, sy / n as f64),
+        });
+    }
+    components.sort_by(|a, b| b.area_m2.total_cmp(&a.area_m2));
+    if std::env::var_os("SORNAV_EC_DUMP").is_some()
+        && (trace.agent_end != "exhausted"
+            || components
+                .first()
+                .is_some_and(|c| c.area_m2 > MAX_UNKNOWN_M2))
+    {
+        dump(name, start, agent, &trace, nav, &reachable, &components);
+    }
+    HomeResult {
+        home: name.to_owned(),
+        label: start.label.clone(),
+        start: p,
+        actions: r.actions,
+        end: trace.agent_end,
+        reachable_m2: reachable.len() as f64 * cs * cs,
+        known_share: 1.0 - n_unknown as f64 / reachable.len().max(1) as f64,
+        unknown: components,
+        wall_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// Prints a failing run (`SORNAV_EC_DUMP`): the end pose, the agent's
+/// levels, stairs, frontiers and last decisions, and an 8 m map of the
+/// agent's grid against the ground truth around the largest unknown
+/// component (or the end pose).
+fn dump(
+    name: &str,
+    start: &Start,
+    agent: &Agent,
+    trace: &EpisodeTrace,
+    nav: &NavMesh,
+    reachable: &[SpanId],
+    components: &[Component],
+) {
+    let grid = agent
+        .frontier_map()
+        .level_map(LevelId(0))
+        .expect("the start floor's map")
+        .grid();
+    let (cs, origin, p) = (nav.config().cell_size, nav.origin(), start.position);
+    let map = agent.frontier_map();
+    let last = trace.trajectory.last().copied().unwrap_or_default();
+    eprintln!(
+        "{name} ({}): end at ({:.2}, {:.2}, {:.2}); agent levels {:?}; stairs {:?}",
+        start.label,
+        last[0],
+        last[1],
+        last[2],
+        map.levels()
+            .map(|l| (l.id.0, l.floor_z))
+            .collect::<Vec<_>>(),
+        map.stairs()
+            .iter()
+            .map(|s| format!(
+                "{:?}->{:?} complete {}",
+                s.lower.level,
+                s.upper.level,
+                s.is_complete()
+            ))
+            .collect::<Vec<_>>()
+    );
+    for l in map.levels() {
+        let lm = map.level_map(l.id).expect("level");
+        eprintln!(
+            "  level {} frontiers {} frontier cells {}",
+            l.id.0,
+            lm.graph().len(),
+            lm.frontier_cells().count()
+        );
+    }
+    let runs = trace.decisions.runs();
+    for d in runs
+        .iter()
+        .filter(|d| {
+            d.action != sornav::DecisionAction::Exhausted
+                && !format!("{:?}", d.action).contains("Continue")
+        })
+        .rev()
+        .take(14)
+        .collect::<Vec<_>>()
+        .into_iter()
+        .rev()
+    {
+        eprintln!("  {d:?}");
+    }
+    let centre = components
+        .first()
+        .map_or(Point2::new(f64::from(last[0]), f64::from(last[1])), |c| {
+            c.centroid
+        });
+    let reach: std::collections::HashSet<(usize, usize)> =
+        reachable.iter().map(|&s| nav.span_cell(s)).collect();
+    eprintln!(
+        "{name} ({}): 8 m around ({:.2}, {:.2}), y down the page, 0.1 m per character: \
+         U reachable + unknown, o reachable + known + traversable for the agent, x reachable + known, not traversable; off the reachable floor: # occupied, . free, blank unknown; \
+         then the height (dm, relative to the start) of the walking surface nearest the start floor",
+        start.label, centre.x, centre.y
+    );
+    for dy in (-40..=40).rev() {
+        let mut row = String::new();
+        let mut hrow = String::new();
+        for dx in -40..=40 {
+            let q = Point2::new(
+                centre.x + 0.1 * f64::from(dx),
+                centre.y + 0.1 * f64::from(dy),
+            );
+            let col = (
+                ((q.x - origin.x) / cs).floor() as usize,
+                ((q.y - origin.y) / cs).floor() as usize,
+            );
+            let state = grid
+                .cell_of(&q)
+                .map_or(CellState::Unknown, |cell| grid.state(cell));
+            let trav = grid.cell_of(&q).is_ok_and(|cell| grid.is_traversable(cell));
+            row.push(if reach.contains(&col) {
+                if state == CellState::Unknown {
+                    'U'
+                } else if trav {
+                    'o'
+                } else {
+                    'x'
+                }
+            } else {
+                match state {
+                    CellState::Occupied => '#',
+                    CellState::Free => '.',
+                    CellState::Unknown => ' ',
+                }
+            });
+            let hz = nav
+                .height_at(q.x, q.y, p.z)
+                .map(|z| ((z - p.z) * 10.0).round() as i64);
+            hrow.push_str(&match hz {
+                Some(z) => format!("{:>3}", z.clamp(-99, 99)),
+                None => "  .".to_owned(),
+            });
+        }
+        eprintln!("  {row}   {hrow}");
+    }
+}
+
+/// Runs the starts of `homes` (file stems) that `select` accepts (home,
+/// start label) on parallel threads; results in home, then start order.
+fn run_homes(homes: &[&str], select: &dyn Fn(&str, &str) -> bool) -> Option<Vec<HomeResult>> {
+    let dir = sornav_test_support::shared_data("sh3d-homes")?;
+    let models = dir.join("models");
+    let sims: Vec<(String, Simulator)> = homes
+        .iter()
+        .map(|h| {
+            (
+                (*h).to_owned(),
+                simulator(&dir.join("homes").join(format!("{h}.xml")), &models),
+            )
+        })
+        .collect();
+    let jobs: Vec<(usize, Start)> = sims
+        .iter()
+        .enumerate()
+        .flat_map(|(i, (_, sim))| starts_of(sim.nav(), SEED).into_iter().map(move |s| (i, s)))
+        .filter(|(i, s)| {
+            select(&sims[*i].0, &s.label)
+                && std::env::var("SORNAV_EC_START").map_or(true, |f| s.label == f)
+        })
+        .collect();
+    let threads = std::thread::available_parallelism()
+        .map_or(2, std::num::NonZeroUsize::get)
+        .min(jobs.len())
+        .max(1);
+    let next = Mutex::new(0usize);
+    let results: Mutex<Vec<Option<HomeResult>>> = Mutex::new(vec![None; jobs.len()]);
+    std::thread::scope(|s| {
+        for _ in 0..threads {
+            s.spawn(|| {
+                loop {
+                    let i = {
+                        let mut n = next.lock().unwrap();
+                        let i = *n;
+                        *n += 1;
+                        i
+                    };
+                    let Some((home, start)) = jobs.get(i) else {
+                        break;
+                    };
+                    let (name, sim) = &sims[*home];
+                    let r = explore(sim, name, start);
+                    eprintln!("{}", r.report());
+                    results.lock().unwrap()[i] = Some(r);
+                }
+            });
+        }
+    });
+    Some(
+        results
+            .into_inner()
+            .unwrap()
+            .into_iter()
+            .map(|r| r.expect("every start ran"))
+            .collect(),
+    )
+}
+
+const ALL: [&str; 6] = [
+    "2BedroomApartment",
+    "2BedroomHouseWithBasement",
+    "3BedroomApartment",
+    "3BedroomHouseWithAttic",
+    "4BedroomHouse",
+    "Studio",
+];
+
+/// The starts (home, start label) where today's agent does not meet the
+/// criterion: run by [`known_incomplete_explorations`] (ignored), left out
+/// of [`exploration_leaves_no_reachable_unknown_area`].
+const KNOWN_FAILURES: [(&str, &str); 4] = [
+    ("2BedroomHouseWithBasement", "level 0 piece 0 random 1"),
+    ("2BedroomHouseWithBasement", "level 1 piece 0 centre"),
+    ("2BedroomHouseWithBasement", "level 1 piece 0 random 0"),
+    ("2BedroomHouseWithBasement", "level 1 piece 1 centre"),
+];
+
+fn known_failure(home: &str, label: &str) -> bool {
+    KNOWN_FAILURES.contains(&(home, label))
+}
+
+/// The homes to run: all, or `SORNAV_EC_HOMES` (comma-separated stems).
+fn homes() -> Vec<String> {
+    std::env::var("SORNAV_EC_HOMES")
+        .ok()
+        .map(|v| v.split(',').map(|s| s.trim().to_owned()).collect())
+        .unwrap_or_else(|| ALL.iter().map(|s| (*s).to_owned()).collect())
+}
+
+/// Runs the selected starts and asserts the criterion on each.
+fn check(select: &dyn Fn(&str, &str) -> bool) {
+    let t0 = Instant::now();
+    let homes = homes();
+    let homes: Vec<&str> = homes.iter().map(String::as_str).collect();
+    let Some(results) = run_homes(&homes, select) else {
+        return;
+    };
+    eprintln!(
+        "{} runs, wall time {:.0} s",
+        results.len(),
+        t0.elapsed().as_secs_f64()
+    );
+    let failed: Vec<String> = results
+        .iter()
+        .filter(|r| !r.passes())
+        .map(HomeResult::report)
+        .collect();
+    assert!(
+        failed.is_empty(),
+        "exploration incomplete or not finished:\n{}",
+        failed.join("\n")
+    );
+}
+
+/// Every start of every shared home but the [`KNOWN_FAILURES`]: the agent
+/// declares the search exhausted within the budget and leaves no
+/// reachable unknown component larger than 1 m² on its start floor (see
+/// the module docs).
+#[test]
+fn exploration_leaves_no_reachable_unknown_area() {
+    check(&|home, label| !known_failure(home, label));
+}
+
+/// The [`KNOWN_FAILURES`], all in `2BedroomHouseWithBasement` and all at
+/// the basement stair (flight from the basement, z -1.50, to the ground
+/// floor, z 1.12, around x 4.9-5.3, y -1.6..-0.2). Measured with the
+/// agent of this commit (`sim_agent_config`, 160 x 120, 1500 actions):
+///
+/// * `level 0 piece 0 random 1` (basement start (9.29, -0.99)):
+///   **exhausted too early** after 192 actions, known 92.3 %, largest
+///   unknown component 2.56 m² at (2.22, -0.77), the far half of the
+///   basement's west room, seen only from its doorway. The agent explored
+///   a stair frontier and stopped on the flight's first tread (z +0.22,
+///   within the level's tolerance) where the stair then left its map; every
+///   MOVE_FORWARD from there toward the remaining frontiers (heading -60
+///   deg) collides in the simulator, so each of the five exploration
+///   missions that followed failed `Stuck` after four collisions *without
+///   the robot moving*, and each failure excluded its frontier (a failed
+///   non-stair exploration excludes its frontier). With all of them
+///   excluded the agent declared the search exhausted. The frontiers were
+///   not unreachable: the robot was stuck (the follower's fallback when
+///   no heading is traversable on the agent's map repeats the blocked
+///   move). With `SORNAV_EC_NO_STAIRS=1` the same start ends `exhausted`
+///   after 143 actions with 99.9 % known.
+/// * `level 1 piece 0 centre` (ground floor (5.09, -7.09)), `level 1
+///   piece 0 random 0` ((8.84, -7.74)), `level 1 piece 1 centre` ((4.64,
+///   -3.19)): **budget end** (1500 actions, not exhausted) with the start
+///   floor 99.9 %, 99.5 %, 99.7 % known (largest unknown components 0.02,
+///   0.09, 0.03 m²: the start floor is complete). The agent went down
+///   the basement stair, stood on it 0.8 m below the ground floor and,
+///   "off a known floor" with no reachable frontier, re-dispatched a
+///   retreat every step ("back to the last place with one") without
+///   moving until the budget ran out: the thrashing of issue 20 item 2,
+///   not an incomplete floor.
+///
+/// Run with `cargo test -p sornav-examples --test exploration_complete --
+/// --ignored --nocapture`. Knobs (any test of this file):
+/// `SORNAV_EC_HOMES=Studio,4BedroomHouse` picks homes,
+/// `SORNAV_EC_START="level 0 piece 0 random 1"` one start label,
+/// `SORNAV_EC_NO_STAIRS=1` keeps the robot on its floor
+/// (`frontier.levels.allow_stairs = false`), `SORNAV_EC_DUMP=1` prints,
+/// for a failing run, the end pose, the agent's levels, stairs, frontiers
+/// and last decisions and an 8 m map of the agent's grid against the
+/// ground truth around the largest unknown component; `SORNAV_DEBUG=1` /
+/// `SORNAV_DEBUG_ACTIONS=1` log dispatches / actions.
+#[test]
+#[ignore = "known failures of today's agent (stuck on the basement stair); a diagnostic run"]
+fn known_incomplete_explorations() {
+    check(&known_failure);
+}
