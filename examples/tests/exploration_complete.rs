@@ -608,11 +608,9 @@ const ALL: [&str; 6] = [
 /// The starts (home, start label) where today's agent does not meet the
 /// criterion: run by [`known_incomplete_explorations`] (ignored), left out
 /// of [`exploration_leaves_no_reachable_unknown_area`].
-const KNOWN_FAILURES: [(&str, &str); 4] = [
+const KNOWN_FAILURES: [(&str, &str); 2] = [
+    ("2BedroomHouseWithBasement", "level 0 piece 0 random 0"),
     ("2BedroomHouseWithBasement", "level 0 piece 0 random 1"),
-    ("2BedroomHouseWithBasement", "level 1 piece 0 centre"),
-    ("2BedroomHouseWithBasement", "level 1 piece 0 random 0"),
-    ("2BedroomHouseWithBasement", "level 1 piece 1 centre"),
 ];
 
 fn known_failure(home: &str, label: &str) -> bool {
@@ -661,13 +659,14 @@ fn exploration_leaves_no_reachable_unknown_area() {
     check(&|home, label| !known_failure(home, label));
 }
 
-/// The [`KNOWN_FAILURES`], all in `2BedroomHouseWithBasement` and all at
-/// the basement stair (flight from the basement, z -1.50, to the ground
-/// floor, z 1.12, around x 4.9-5.3, y -1.6..-0.2). Measured with the
-/// agent of this commit (`sim_agent_config`, 160 x 120, 1500 actions):
+/// The [`KNOWN_FAILURES`], both basement starts of
+/// `2BedroomHouseWithBasement` (the basement stair, from z -1.50 to the
+/// ground floor at z 1.12, lies around x 4.9-5.3, y -1.6..-0.2). Measured
+/// with the agent of this commit (`sim_agent_config`, 160 x 120, 1500
+/// actions):
 ///
 /// * `level 0 piece 0 random 1` (basement start (9.29, -0.99)):
-///   **exhausted too early** after 192 actions, known 92.3 %, largest
+///   **exhausted too early** after 194 actions, known 92.3 %, largest
 ///   unknown component 2.56 m² at (2.22, -0.77), the far half of the
 ///   basement's west room, seen only from its doorway. The agent explored
 ///   a stair frontier and stopped on the flight's first tread (z +0.22,
@@ -682,16 +681,17 @@ fn exploration_leaves_no_reachable_unknown_area() {
 ///   no heading is traversable on the agent's map repeats the blocked
 ///   move). With `SORNAV_EC_NO_STAIRS=1` the same start ends `exhausted`
 ///   after 143 actions with 99.9 % known.
-/// * `level 1 piece 0 centre` (ground floor (5.09, -7.09)), `level 1
-///   piece 0 random 0` ((8.84, -7.74)), `level 1 piece 1 centre` ((4.64,
-///   -3.19)): **budget end** (1500 actions, not exhausted) with the start
-///   floor 99.9 %, 99.5 %, 99.7 % known (largest unknown components 0.02,
-///   0.09, 0.03 m²: the start floor is complete). The agent went down
-///   the basement stair, stood on it 0.8 m below the ground floor and,
-///   "off a known floor" with no reachable frontier, re-dispatched a
-///   retreat every step ("back to the last place with one") without
-///   moving until the budget ran out: the thrashing of issue 20 item 2,
-///   not an incomplete floor.
+/// * `level 0 piece 0 random 0` (basement start (1.04, -2.29)):
+///   **exhausted on the other floor** after 672 actions with the basement
+///   90.1 % known (largest unknown component 3.06 m² at (0.95, -4.51), a
+///   corner of the basement's west room). The agent went up the stair
+///   before the basement was finished, explored the ground floor and
+///   declared the search exhausted there (it ended at (4.93, -2.54, 1.12)):
+///   the exhaustion check looks at the robot's floor only, and the
+///   basement's last frontier was not revisited. This start passed with
+///   the agent before the drop-edge looks (the robot left the basement
+///   later); the three ground-floor starts that failed then (budget ends
+///   thrashing on the basement stair) pass now.
 ///
 /// Run with `cargo test -p sornav-examples --test exploration_complete --
 /// --ignored --nocapture`. Knobs (any test of this file):
@@ -704,7 +704,7 @@ fn exploration_leaves_no_reachable_unknown_area() {
 /// ground truth around the largest unknown component; `SORNAV_DEBUG=1` /
 /// `SORNAV_DEBUG_ACTIONS=1` log dispatches / actions.
 #[test]
-#[ignore = "known failures of today's agent (stuck on the basement stair); a diagnostic run"]
+#[ignore = "known failures of today's agent (basement starts of 2BedroomHouseWithBasement); a diagnostic run"]
 fn known_incomplete_explorations() {
     check(&known_failure);
 }
