@@ -44,10 +44,14 @@
 //! [`known_incomplete_explorations`], whose doc comment gives the
 //! figures and causes.
 
+#[allow(dead_code)] // this binary uses only the simulator helper
+mod common;
+
 use std::path::Path;
 use std::sync::Mutex;
 use std::time::Instant;
 
+use common::simulator_160x120;
 use nalgebra::{Point2, Point3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -58,8 +62,7 @@ use sornav_examples::adapter::{
 };
 use sornav_platform_sim::levels::LEVEL_HALF_HEIGHT;
 use sornav_platform_sim::{
-    CameraConfig, Episode, NavMesh, ObjectGoal, RunConfig, Scene, SimConfig, Simulator, SpanId,
-    ViewPoint, run_episode,
+    Episode, NavMesh, ObjectGoal, RunConfig, Scene, Simulator, SpanId, ViewPoint, run_episode,
 };
 
 /// The target: a category no instance of any home carries.
@@ -258,20 +261,9 @@ fn flood(
 
 /// Loads a home into the simulator (160 x 120 camera).
 fn simulator(home: &Path, models: &Path) -> Simulator {
-    let scene =
-        Scene::from_home_xml(home, models).unwrap_or_else(|e| panic!("{}: {e}", home.display()));
-    Simulator::new(
-        scene,
-        SimConfig {
-            camera: CameraConfig {
-                width: 160,
-                height: 120,
-                ..CameraConfig::default()
-            },
-            ..SimConfig::default()
-        },
+    simulator_160x120(
+        Scene::from_home_xml(home, models).unwrap_or_else(|e| panic!("{}: {e}", home.display())),
     )
-    .unwrap()
 }
 
 /// Whether the agent may take stairs: yes, as in `sim_agent_config`,

@@ -2,10 +2,14 @@
 //! targets on the other floor (up and down the stairs), from its own
 //! rendered frames only.
 
+#[allow(dead_code)] // this binary uses only the simulator helper
+mod common;
+
+use common::simulator_160x120;
 use sornav_examples::adapter::{AdapterConfig, ConfigFactory, SornavPolicy, sim_agent_config};
 use sornav_platform_sim::episodes::{GeneratorConfig, generate_episodes};
 use sornav_platform_sim::procedural::ProceduralConfig;
-use sornav_platform_sim::{CameraConfig, RunConfig, Scene, SimConfig, Simulator, run_episode};
+use sornav_platform_sim::{RunConfig, Scene, Simulator, run_episode};
 
 fn house(seed: u64, floors: u32) -> Simulator {
     let scene = Scene::procedural(
@@ -18,18 +22,7 @@ fn house(seed: u64, floors: u32) -> Simulator {
         },
     )
     .unwrap();
-    Simulator::new(
-        scene,
-        SimConfig {
-            camera: CameraConfig {
-                width: 160,
-                height: 120,
-                ..CameraConfig::default()
-            },
-            ..SimConfig::default()
-        },
-    )
-    .unwrap()
+    simulator_160x120(scene)
 }
 
 /// Runs the cross-floor episodes of `houses`; returns (successes, runs)
@@ -263,18 +256,7 @@ fn finds_targets_on_the_other_floor() {
 /// or the one above first is the policy's choice, not asserted here.)
 #[test]
 fn a_start_at_the_head_of_a_stair_going_down_maps_the_flight() {
-    let sim = Simulator::new(
-        Scene::procedural(2014, &ProceduralConfig::default()).unwrap(),
-        SimConfig {
-            camera: CameraConfig {
-                width: 160,
-                height: 120,
-                ..CameraConfig::default()
-            },
-            ..SimConfig::default()
-        },
-    )
-    .unwrap();
+    let sim = simulator_160x120(Scene::procedural(2014, &ProceduralConfig::default()).unwrap());
     let episodes = generate_episodes(
         &sim,
         &GeneratorConfig {

@@ -5,7 +5,7 @@ use std::path::{Path, PathBuf};
 use sornav_examples::adapter::{AdapterConfig, sim_agent_config};
 use sornav_examples::harness::{EpisodeSource, EvalConfig, LlmSettings, RunOptions};
 use sornav_examples::scenes::SceneSource;
-use sornav_platform_sim::{CameraConfig, RunConfig};
+use sornav_platform_sim::{CameraConfig, RunConfig, Scene, SimConfig, Simulator};
 
 /// A small evaluation of `variants` (simulator agent configuration, 96 x 72
 /// camera) on the procedural houses `scene_seeds`: one episode per target
@@ -94,4 +94,22 @@ pub fn sornav_sim_ok<S: AsRef<std::ffi::OsStr>>(args: &[S], out: &Path) -> Strin
         String::from_utf8_lossy(&run.stderr)
     );
     String::from_utf8_lossy(&run.stdout).into_owned()
+}
+
+/// The simulator of `scene` with a 160 x 120 camera (the evaluations'
+/// fast sensing), all else default.
+#[allow(dead_code)] // not every test binary builds simulators itself
+pub fn simulator_160x120(scene: Scene) -> Simulator {
+    Simulator::new(
+        scene,
+        SimConfig {
+            camera: CameraConfig {
+                width: 160,
+                height: 120,
+                ..CameraConfig::default()
+            },
+            ..SimConfig::default()
+        },
+    )
+    .expect("a 160 x 120 simulator")
 }
