@@ -37,8 +37,8 @@ use serde::{Deserialize, Serialize};
 use sornav::executor::{FailureReason, MissionId, MissionKind, MissionStatus, RobotPose};
 use sornav::semantic_map::{LabelId, PinholeCamera, optical_pose};
 use sornav::{
-    Agent, AgentCommand, AgentConfig, AgentError, BoxedPolicy, DepthObservation, LabelEntry,
-    Observation, Sensor,
+    Agent, AgentCommand, AgentConfig, AgentError, BoxedPolicy, DecisionAction, DepthObservation,
+    LabelEntry, Observation, Sensor,
 };
 use sornav_platform_sim::follow::{FollowerConfig, MoveOutcome, WaypointFollower};
 use sornav_platform_sim::render::NO_INSTANCE;
@@ -727,7 +727,16 @@ impl<F: AgentFactory> SornavPolicy<F> {
         match command {
             AgentCommand::Dispatch { id, mission } => {
                 self.exhausted_turns = 0;
-                if let MissionKind::Relocate { .. } = mission.kind {
+                // A relocation decided by the supervisor; retreats (walking
+                // back, looking at an unreached frontier or down through a
+                // drop edge) are relocate missions outside any cluster and
+                // are not counted.
+                let relocation = self
+                    .agent
+                    .as_ref()
+                    .and_then(Agent::last_decision)
+                    .is_some_and(|d| d.action == DecisionAction::Relocate);
+                if matches!(mission.kind, MissionKind::Relocate { .. }) && relocation {
                     self.trace.relocations.push((
                         step,
                         [feet.x as f32, feet.y as f32],
