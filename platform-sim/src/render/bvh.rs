@@ -286,6 +286,9 @@ impl PreparedRay {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Bvh {
     nodes: Vec<Node>,
+    /// The same tree with 4-wide nodes, for the camera's tile kernel (empty
+    /// when it cannot be built; the kernel then declines every tile).
+    quads: Vec<super::quad::QuadNode>,
     triangles: Vec<BvhTriangle>,
     depth: usize,
     input_triangles: usize,
@@ -369,6 +372,7 @@ impl Bvh {
             })
             .collect();
         Ok(Bvh {
+            quads: super::quad::collapse(&nodes),
             nodes,
             triangles: tris,
             depth,
@@ -517,6 +521,11 @@ impl Bvh {
                 out[i] = (slot[i] != u32::MAX).then(|| self.hit_at(slot[i] as usize, tmax[i]));
             }
         }
+    }
+
+    /// The 4-wide nodes (for the tile kernel).
+    pub(super) fn quads(&self) -> &[super::quad::QuadNode] {
+        &self.quads
     }
 
     /// The flattened nodes (for the SIMD kernels).

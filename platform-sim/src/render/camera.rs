@@ -5,8 +5,9 @@ use nalgebra::{Point3, Vector3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::RenderError;
-use super::bvh::{Bvh, PreparedRay};
+use super::bvh::{Bvh, BvhHit};
+use super::tile::{ROWS, TileHits, TileRays, TileScratch, trace_tile, trace_tile_packet};
+use super::{RenderError, RenderKernel};
 use crate::Scene;
 use crate::noise::{NoiseConfig, NoiseModel};
 
@@ -273,6 +274,7 @@ pub struct Camera {
     /// Colour key per payload (category index for scenes); identity when empty.
     colour_keys: Vec<u32>,
     noise: Option<NoiseModel>,
+    kernel: RenderKernel,
 }
 
 impl Camera {
@@ -291,6 +293,7 @@ impl Camera {
             config,
             colour_keys: Vec::new(),
             noise,
+            kernel: RenderKernel::Auto,
         })
     }
 
@@ -335,12 +338,34 @@ impl Camera {
             config,
             colour_keys,
             noise,
+            kernel: RenderKernel::Auto,
         })
     }
 
     /// The configuration.
     pub fn config(&self) -> &CameraConfig {
         &self.config
+    }
+
+    /// This camera tracing with `kernel` (default [`RenderKernel::Auto`]).
+    /// Frames are the same bits with every kernel; only the speed differs.
+    ///
+    /// # Errors
+    /// [`RenderError::Config`] when the kernel cannot run on this CPU.
+    pub fn with_kernel(mut self, kernel: RenderKernel) -> Result<Camera, RenderError> {
+        if !kernel.is_available() {
+            return Err(RenderError::Config {
+                field: "kernel",
+                message: format!("{kernel:?} is not available on this CPU"),
+            });
+        }
+        self.kernel = kernel;
+        Ok(self)
+    }
+
+    /// The kernel that traces this camera's tiles.
+    pub fn kernel(&self) -> RenderKernel {
+        self.kernel
     }
 
     /// The acceleration structure.
@@ -383,6 +408,10 @@ impl Camera {
         ];
         let focal = c.focal() as f32;
         let (cx, cy) = (c.width as f32 / 2.0, c.height as f32 / 2.0);
+        // Image-plane offset of every column, padded to whole tiles.
+        let columns: Vec<f32> = (0..w.next_multiple_of(TILE))
+            .map(|u| (u as f32 + 0.5 - cx) / focal)
+            .collect();
         let (dmin, dmax) = (c.min_depth as f32, c.max_depth as f32);
         let t_far = c
             .semantic_max_depth
@@ -399,54 +428,68 @@ impl Camera {
             }
             let v0 = band * TILE;
             let rows = drows.len() / w;
-            let mut rays = [PreparedRay::DUMMY; TILE * TILE];
-            let mut index = [0usize; TILE * TILE];
-            let mut hits = [None; TILE * TILE];
+            let mut tile = TileRays {
+                origin,
+                base: [[0.0; 3]; ROWS],
+                right: r,
+                a: &[0.0; TILE],
+                rows,
+                cols: TILE,
+                depth: (dmin, dmax),
+                semantic: sem_max,
+            };
+            for (dv, base) in tile.base[..rows].iter_mut().enumerate() {
+                let b = -(((v0 + dv) as f32 + 0.5 - cy) / focal);
+                *base = [f[0] + b * up[0], f[1] + b * up[1], f[2] + b * up[2]];
+            }
+            let mut hits = TileHits::EMPTY;
+            let mut scratch = TileScratch::new();
             for u0 in (0..w).step_by(TILE) {
-                let mut n = 0;
-                for dv in 0..rows {
-                    let b = -(((v0 + dv) as f32 + 0.5 - cy) / focal);
-                    let base = [f[0] + b * up[0], f[1] + b * up[1], f[2] + b * up[2]];
-                    // A full row of the tile: 8 rays prepared at once.
-                    if u0 + TILE <= w
-                        && super::packet8::prepare_row8(
-                            origin,
-                            base,
-                            r,
-                            std::array::from_fn(|i| ((u0 + i) as f32 + 0.5 - cx) / focal),
-                            &mut rays[n..n + TILE],
-                        )
-                    {
-                        for (i, p) in index[n..n + TILE].iter_mut().enumerate() {
-                            *p = dv * w + u0 + i;
-                        }
-                        n += TILE;
-                        continue;
-                    }
-                    for u in u0..(u0 + TILE).min(w) {
-                        let a = (u as f32 + 0.5 - cx) / focal;
-                        let dir = [base[0] + a * r[0], base[1] + a * r[1], base[2] + a * r[2]];
-                        if let Some(ray) = PreparedRay::new(origin, dir) {
-                            rays[n] = ray;
-                            index[n] = dv * w + u;
-                            n += 1;
-                        }
-                    }
+                tile.cols = (w - u0).min(TILE);
+                // Borrowed, not copied: the kernel loads it as one vector.
+                tile.a = columns[u0..u0 + TILE].try_into().unwrap_or(&[0.0; TILE]);
+                if !trace_tile(
+                    self.kernel,
+                    &self.bvh,
+                    &tile,
+                    0.0,
+                    t_far,
+                    &mut hits,
+                    &mut scratch,
+                ) {
+                    // A tree the tile kernel cannot take (see `Bvh::build`).
+                    trace_tile_packet(&self.bvh, &tile, 0.0, t_far, &mut hits);
                 }
-                self.bvh
-                    .intersect_packet(&rays[..n], 0.0, t_far, &mut hits[..n]);
-                for k in 0..n {
-                    let Some(hit) = hits[k] else { continue };
-                    let p = index[k];
-                    // The forward component of every direction is 1, so t is the z-depth.
-                    if hit.t >= dmin && hit.t <= dmax {
-                        drows[p] = hit.t;
+                for dv in 0..rows {
+                    let row = dv * w + u0..dv * w + u0 + tile.cols;
+                    let (t, slot) = (&hits.t[dv], &hits.slot[dv]);
+                    let (depth, id) = (&hits.depth[dv], &hits.instance[dv]);
+                    if let (Ok(d), Ok(k)) = (
+                        <&mut [f32; TILE]>::try_from(&mut drows[row.clone()]),
+                        <&mut [u32; TILE]>::try_from(&mut irows[row.clone()]),
+                    ) {
+                        // A full tile row: two fixed-size copies.
+                        *d = *depth;
+                        *k = *id;
+                    } else {
+                        drows[row.clone()].copy_from_slice(&depth[..tile.cols]);
+                        irows[row.clone()].copy_from_slice(&id[..tile.cols]);
                     }
-                    if hit.t <= sem_max {
-                        irows[p] = hit.payload;
-                    }
-                    if let Some(crows) = crows.as_deref_mut() {
-                        crows[p] = self.shade(&hit, rays[k].direction());
+                    let Some(crows) = crows.as_deref_mut() else {
+                        continue;
+                    };
+                    for (i, c) in crows[row].iter_mut().enumerate() {
+                        let Some(tri) = self.bvh.triangles().get(slot[i] as usize) else {
+                            continue;
+                        };
+                        let hit = BvhHit {
+                            t: t[i],
+                            triangle: tri.index,
+                            payload: tri.payload,
+                            slot: slot[i],
+                        };
+                        let dir = [0, 1, 2].map(|k| tile.base[dv][k] + tile.a[i] * r[k]);
+                        *c = self.shade(&hit, dir);
                     }
                 }
             }

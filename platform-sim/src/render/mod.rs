@@ -3,10 +3,14 @@
 
 mod bvh;
 mod camera;
+mod lanes;
 mod packet8;
+mod quad;
+mod tile;
 
 pub use bvh::{Bvh, BvhHit, BvhTriangle, MAX_LEAF, MAX_PACKET, PreparedRay};
 pub use camera::{Camera, CameraConfig, CameraPose, Frame, NO_INSTANCE, palette};
+pub use lanes::RenderKernel;
 
 use std::path::PathBuf;
 
