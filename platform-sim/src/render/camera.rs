@@ -383,9 +383,13 @@ impl Camera {
         }
     }
 
-    /// Renders one frame: 8x8 pixel tiles are traced as ray packets
-    /// ([`Bvh::intersect_packet`]), bands of tiles in parallel. `frame_seed` seeds the noise model (unused without
-    /// noise), so a given (pose, seed) always yields the same image.
+    /// Renders one frame: 8x8 pixel tiles are traced by the tile kernel
+    /// (one frustum per tile through a 4-wide BVH, 8 rays per AVX2
+    /// instruction where the CPU has it; [`Camera::with_kernel`]), bands of
+    /// tiles in parallel. Depth equals, bit for bit, what
+    /// [`Bvh::intersect_packet`] gives for the same rays; `frame_seed` seeds
+    /// the noise model (unused without noise), so a given (pose, seed)
+    /// always yields the same image.
     ///
     /// Pixels are rendered in parallel rows (rayon); set `RAYON_NUM_THREADS=1`
     /// for single-core figures.

@@ -5,18 +5,24 @@
 //! # Algorithm
 //! * **Rays** are made inside the kernel, a row at a time, straight into
 //!   vectors: direction `base + a right`, reciprocal (clamped as
-//!   [`PreparedRay::new`]), dominant axis and shear (Woop et al. 2013). The
-//!   kernel declines (returns `false`, the camera then traces the tile as
-//!   [`PreparedRay`]s with [`Bvh::intersect_packet`]) when a ray is invalid,
-//!   or the tile's rays do not share their dominant axis or the signs of
-//!   their direction components (a few tiles along the image lines where a
-//!   component changes sign or two components are equal in size).
+//!   [`PreparedRay::new`]), dominant axis and shear (Woop et al. 2013), with
+//!   the same IEEE operations as [`PreparedRay::new`]. Rays that
+//!   [`PreparedRay::new`] would refuse (zero or non-finite direction) and
+//!   columns beyond the image are masked out.
+//! * **Passes**: a frustum needs rays that share the sign of each direction
+//!   component, and the triangle test is specialised for one dominant axis.
+//!   The tile's rays are split into classes (dominant axis, three signs);
+//!   nearly every tile is one class and is traced in one pass, the few along
+//!   the image lines where a component changes sign or two components are
+//!   equal in size take one pass per class, with the other lanes masked.
 //! * **Traversal**: the tile's frustum (shared origin, per-axis range of the
 //!   reciprocal directions) is tested against a quad node's four children at
 //!   once by interval arithmetic (Boulos et al. 2006); children entered are
 //!   visited nearest first (by the frustum's entry distance), the others
 //!   pushed with that distance and skipped when popped if every ray of the
 //!   tile already has a closer hit (Reshetov, Soupikov and Hurley 2005).
+//!   Nodes are not tested ray by ray: the frustum decides, the leaves'
+//!   per-ray box tests catch the rest.
 //! * **Leaves**: each row's rays are tested against the leaf's box (an
 //!   active-ray mask; rows with no active ray skip the leaf), then against
 //!   each triangle with the watertight test, specialised at compile time for
@@ -24,6 +30,18 @@
 //!   origin are computed once per leaf, not per row. The costly part of the
 //!   test (determinant, division) runs only when some active ray falls
 //!   inside the triangle's edges.
+//! * **Readings**: depth (z-depth in the window) and instance (within the
+//!   semantic range) are made in the kernel too, 8 pixels per instruction.
+//!
+//! # Why AVX2 through `pulp`
+//! `wide::f32x8` compiled for baseline x86-64 runs each operation as two SSE
+//! instructions. `pulp`'s x86-64-v3 token is detected once at run time and
+//! compiles the kernel, inlined whole, for AVX2 inside `V3::vectorize`:
+//! 256-bit registers with no `unsafe` in this crate and no build flags for
+//! users. Every helper the kernel calls must inline (`#[inline(always)]`,
+//! no `array::map` or `from_fn` closures over vectors): an out-of-line
+//! helper is compiled without AVX and each intrinsic becomes a call (that
+//! mistake made the first version slower than the SSE path).
 //!
 //! # Results
 //! Every ray's `t` is the closest hit's `t` computed by the same IEEE
@@ -105,11 +123,11 @@ impl TileHits {
     };
 }
 
-/// Traces a tile with `kernel` (resolved; `Auto` picks the best available).
-/// `false` when the kernel declines the tile (see the module docs) or is
-/// not available on this CPU; `out` is then unspecified.
-///
-/// Requires `t_min < t_max` (neither NaN) and `1 <= tile.rows <= ROWS`.
+/// Traces a tile with `kernel` (`Auto` picks the best available). `false`,
+/// with `out` unspecified, when the kernel is not available on this CPU,
+/// the tree has no 4-wide form (see [`super::quad::collapse`]), the origin
+/// is not finite, `t_min < t_max` does not hold or `tile.rows` is not in
+/// `1..=ROWS`; the caller then uses [`trace_tile_packet`].
 pub(super) fn trace_tile(
     kernel: RenderKernel,
     bvh: &Bvh,
@@ -119,7 +137,8 @@ pub(super) fn trace_tile(
     out: &mut TileHits,
     scratch: &mut TileScratch,
 ) -> bool {
-    if bvh.quads().is_empty() || !(t_min < t_max) || !(1..=ROWS).contains(&tile.rows) {
+    let ordered = t_min < t_max;
+    if bvh.quads().is_empty() || !ordered || !(1..=ROWS).contains(&tile.rows) {
         return false;
     }
     match kernel.resolve() {
@@ -329,8 +348,8 @@ fn prepare<L: Lanes>(l: L, tile: &TileRays<'_>, rays: &mut Rays) -> Option<RayCl
         classes.kz[0][g] = b0;
         classes.kz[1][g] = b1;
         classes.kz[2][g] = !(b0 | b1);
-        for c in 0..3 {
-            classes.neg[c][g] = l.bitmask(l.lt(d[c], zero)) as u8;
+        for (neg, dc) in classes.neg.iter_mut().zip(d) {
+            neg[g] = l.bitmask(l.lt(dc, zero)) as u8;
         }
         // Each lane's (kz, kx, ky) components.
         let dx = l.select(k0, d[1], l.select(k1, d[2], d[0]));
@@ -415,8 +434,8 @@ fn trace<L: Lanes>(
             used: 0,
             neg,
         };
-        for g in 0..rays.rows {
-            let mut bits = remaining[g] & classes.kz[kz][g];
+        for (g, left) in remaining[..rays.rows].iter_mut().enumerate() {
+            let mut bits = *left & classes.kz[kz][g];
             for (a, n) in neg.iter().enumerate() {
                 bits &= if *n {
                     classes.neg[a][g]
@@ -424,7 +443,7 @@ fn trace<L: Lanes>(
                     !classes.neg[a][g]
                 };
             }
-            remaining[g] &= !bits;
+            *left &= !bits;
             if bits != 0 {
                 pass.used |= 1 << g;
                 pass.lanes[g] = lane_mask(l, bits);
@@ -762,8 +781,10 @@ mod tests {
             })
     }
 
-    fn tile()
-    -> impl Strategy<Value = ([f32; 3], [[f32; 3]; ROWS], [f32; 3], [f32; W], usize, usize)> {
+    /// Origin, row bases, right vector, column offsets, rows, columns.
+    type Tile = ([f32; 3], [[f32; 3]; ROWS], [f32; 3], [f32; W], usize, usize);
+
+    fn tile() -> impl Strategy<Value = Tile> {
         let v3 = || proptest::array::uniform3(-1.0f32..1.0);
         (
             proptest::array::uniform3(-5.0f32..5.0),
@@ -809,6 +830,7 @@ mod tests {
                 }
                 let mut got = TileHits::EMPTY;
                 prop_assert!(trace_tile(kernel, &bvh, &tile, 0.0, f32::INFINITY, &mut got, &mut scratch));
+                #[allow(clippy::needless_range_loop)]
                 for g in 0..rows {
                     for i in 0..cols {
                         let (gs, ws) = (got.slot[g][i], want.slot[g][i]);
