@@ -14,7 +14,8 @@
 //! following) and `other` (the rest: the simulator's motion and
 //! bookkeeping).
 //!
-//! `cargo run --release -p sornav-examples --example bench_sim [-- EPISODES]`
+//! `cargo run --release -p sornav-examples --example bench_sim [-- EPISODES [WxH]]`
+//! (`WxH`: one resolution only, say `640x480`, for profiling one of them).
 
 use std::time::Instant;
 
@@ -60,6 +61,16 @@ fn main() {
         .and_then(|s| s.parse().ok())
         .unwrap_or(12);
     // One core: a single-thread pool for rendering and everything else.
+    let resolutions: Vec<(u32, u32)> = match std::env::args().nth(2) {
+        Some(r) => {
+            let (w, h) = r.split_once('x').expect("resolution WxH");
+            vec![(
+                w.parse().expect("width in WxH"),
+                h.parse().expect("height in WxH"),
+            )]
+        }
+        None => vec![(160, 120), (640, 480)],
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -69,7 +80,7 @@ fn main() {
         config: agent,
         policy: None,
     };
-    for (width, height) in [(160u32, 120u32), (640, 480)] {
+    for (width, height) in resolutions {
         let camera = CameraConfig {
             width,
             height,

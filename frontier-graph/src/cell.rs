@@ -44,6 +44,18 @@ pub fn cell_center(cell: Cell, resolution: f64) -> Point2<f64> {
     )
 }
 
+/// `t.floor() as i32` for `|t| < 2^31` (every cell coordinate passes
+/// [`MAX_CELL_COORD`] first): a truncation and a correction, two
+/// instructions where `f64::floor` is a library call on baseline x86-64
+/// (no SSE4.1 `roundsd`); it runs for every point and ray of a scan.
+#[inline]
+pub(crate) fn floor_i32(t: f64) -> i32 {
+    // In range by the caller's contract.
+    #[allow(clippy::cast_possible_truncation)]
+    let i = t as i32;
+    if f64::from(i) > t { i - 1 } else { i }
+}
+
 /// The cell containing the world point `p`.
 ///
 /// # Errors
@@ -58,17 +70,108 @@ pub fn cell_of(
     if !p.x.is_finite() || !p.y.is_finite() {
         return Err(FrontierError::NonFinite { what, index });
     }
-    let fx = (p.x / resolution).floor();
-    let fy = (p.y / resolution).floor();
-    let lim = f64::from(MAX_CELL_COORD);
-    if fx.abs() >= lim || fy.abs() >= lim {
-        return Err(FrontierError::OutOfRange {
+    match (cell_coord(p.x / resolution), cell_coord(p.y / resolution)) {
+        (Some(x), Some(y)) => Ok(Cell::new(x, y)),
+        _ => Err(FrontierError::OutOfRange {
             what,
             x: p.x,
             y: p.y,
-        });
+        }),
     }
-    // In range by the check above.
-    #[allow(clippy::cast_possible_truncation)]
-    Ok(Cell::new(fx as i32, fy as i32))
+}
+
+/// `floor(t)` as a cell coordinate when `|floor(t)| < MAX_CELL_COORD`,
+/// `None` beyond or for NaN.
+#[inline]
+pub(crate) fn cell_coord(t: f64) -> Option<i32> {
+    // |floor(t)| < lim exactly when 1 - lim <= t < lim (lim is an integer);
+    // NaN fails both comparisons.
+    let lim = f64::from(MAX_CELL_COORD);
+    (1.0 - lim <= t && t < lim).then(|| floor_i32(t))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    #[test]
+    fn floor_i32_examples() {
+        for (t, f) in [
+            (0.0, 0),
+            (-0.0, 0),
+            (0.5, 0),
+            (-0.5, -1),
+            (-1.0, -1),
+            (1.0, 1),
+            (-1.0 - f64::EPSILON, -2),
+            (2147483647.0, i32::MAX),
+            (-2147483648.0, i32::MIN),
+        ] {
+            assert_eq!(floor_i32(t), f, "{t}");
+        }
+    }
+
+    /// The range check is the one on `floor`, at the limits too.
+    #[test]
+    fn cell_of_limits() {
+        let lim = f64::from(MAX_CELL_COORD);
+        for t in [
+            lim - 1.0,
+            lim - 0.5,
+            lim,
+            1.0 - lim,
+            0.5 - lim,
+            -lim,
+            -lim - 0.5,
+        ] {
+            let reference = t.floor().abs() >= lim;
+            let got = cell_of(&Point2::new(t, 0.0), 1.0, "p", 0);
+            assert_eq!(got.is_err(), reference, "{t}");
+            let got = cell_of(&Point2::new(0.0, t), 1.0, "p", 0);
+            assert_eq!(got.is_err(), reference, "{t}");
+        }
+    }
+
+    #[test]
+    fn cell_coord_refuses_nan_and_infinities() {
+        assert_eq!(cell_coord(f64::NAN), None);
+        assert_eq!(cell_coord(f64::INFINITY), None);
+        assert_eq!(cell_coord(f64::NEG_INFINITY), None);
+    }
+
+    proptest! {
+        /// Differential against `f64::floor` over the whole `i32` range and
+        /// near integers.
+        #[test]
+        fn floor_i32_matches_floor(
+            t in prop_oneof![
+                -2.1e9f64..2.1e9,
+                -100.0f64..100.0,
+                (-1000i32..1000, -3i64..=3).prop_map(|(k, u)| {
+                    f64::from_bits((f64::from(k).to_bits() as i64 + u) as u64)
+                }),
+            ]
+        ) {
+            prop_assert_eq!(floor_i32(t), t.floor() as i32);
+        }
+
+        /// Differential: the cell (or the error) is the one computed with
+        /// `f64::floor`.
+        #[test]
+        fn cell_of_matches_floor(
+            x in prop_oneof![-1.0e6f64..1.0e6, -20.0f64..20.0],
+            y in prop_oneof![-1.0e6f64..1.0e6, -20.0f64..20.0],
+            res in prop_oneof![Just(0.05), 0.01f64..1.0],
+        ) {
+            let (fx, fy) = ((x / res).floor(), (y / res).floor());
+            let lim = f64::from(MAX_CELL_COORD);
+            let got = cell_of(&Point2::new(x, y), res, "p", 0);
+            if fx.abs() >= lim || fy.abs() >= lim {
+                prop_assert!(got.is_err());
+            } else {
+                prop_assert_eq!(got.ok(), Some(Cell::new(fx as i32, fy as i32)));
+            }
+        }
+    }
 }

@@ -7,7 +7,7 @@ use std::collections::BTreeSet;
 use serde::{Deserialize, Serialize};
 
 use crate::cell::{cell_center, cell_of};
-use crate::raycast::traverse;
+use crate::raycast::{Ray, traverse};
 use crate::{Cell, FrontierError, GridConfig};
 
 /// Occupancy state of a cell, from its clamped log-odds.
@@ -552,24 +552,39 @@ impl OccupancyGrid {
         let pad = self.disk.iter().map(|d| d.0.abs()).max().unwrap_or(0) + 2;
         self.ensure(lo.offset(-pad, -pad), hi.offset(pad, pad))?;
 
-        // Collect the scan's cells once each; a hit wins over a miss.
+        // Collect the scan's cells once each, in the order the rays first
+        // reach them; a hit wins over a miss. A ray's end cell is its last
+        // (the only one a hit marks), and its cells stay inside the box of
+        // its end cells, which `ensure` allocated: the walk follows dense
+        // indices.
         let mut touched: Vec<usize> = Vec::new();
+        let origin_index = self.index(oc).ok_or(FrontierError::OutOfRange {
+            what: "origin",
+            x: o2.x,
+            y: o2.y,
+        })?;
+        let mark = &mut self.mark;
         for &(end, hit) in &rays {
-            let end_cell = cell_of(&end, res, "point", 0)?;
-            let (width, min) = (self.width, self.min);
-            let mark = &mut self.mark;
-            traverse(&o2, &end, res, |c| {
-                let i = (c.y - min.y) as usize * width + (c.x - min.x) as usize;
-                if c == end_cell && hit {
+            let ray = Ray::new(&o2, &end, res);
+            let (sx, sy) = ray.direction();
+            // Row offsets fit: the grid is at most 0xFFFF cells wide.
+            let (dx, dy) = (sx as isize, sy as isize * self.width as isize);
+            let end_index = ray.walk(
+                origin_index,
+                |i| i.wrapping_add_signed(dx),
+                |i| i.wrapping_add_signed(dy),
+                |i| {
                     if mark[i] == 0 {
+                        mark[i] = MARK_MISS;
                         touched.push(i);
                     }
-                    mark[i] = MARK_HIT;
-                } else if mark[i] == 0 {
-                    mark[i] = MARK_MISS;
-                    touched.push(i);
-                }
-            });
+                },
+            );
+            // The end cell was first marked as a miss (and queued if new):
+            // a hit overrides that.
+            if hit {
+                mark[end_index] = MARK_HIT;
+            }
         }
 
         let mut delta = GridDelta::default();

@@ -31,6 +31,8 @@
 
 use nalgebra::Point3;
 use rustc_hash::FxHashMap;
+
+use crate::cell::cell_coord;
 use serde::{Deserialize, Serialize};
 
 /// Most intervals kept per column; when a column would get more, the two
@@ -153,11 +155,10 @@ impl SurfaceMap {
 
     /// The column of a horizontal position; `None` outside the numeric range.
     pub(crate) fn key(&self, x: f64, y: f64) -> Option<ColumnKey> {
-        let (fx, fy) = ((x / self.resolution).floor(), (y / self.resolution).floor());
-        let lim = f64::from(crate::MAX_CELL_COORD);
-        // In range by the check.
-        #[allow(clippy::cast_possible_truncation)]
-        (fx.abs() < lim && fy.abs() < lim).then_some((fx as i32, fy as i32))
+        Some((
+            cell_coord(x / self.resolution)?,
+            cell_coord(y / self.resolution)?,
+        ))
     }
 
     /// World x/y of a column centre.
