@@ -209,6 +209,15 @@ impl Simulator {
         self.camera.render(&pose, seed)
     }
 
+    /// [`Simulator::observe_frame`] into `frame`, reusing its buffers
+    /// ([`Camera::render_into`]).
+    pub fn observe_frame_into(&self, agent: &Agent, seed: u64, frame: &mut Frame) {
+        let pose = self
+            .camera
+            .pose_at(&agent.position(), agent.yaw(), agent.pitch());
+        self.camera.render_into(&pose, seed, frame);
+    }
+
     /// Geodesic field to all view points of an episode.
     ///
     /// # Errors
@@ -339,6 +348,17 @@ pub fn run_episode(
     let seed_base = config.noise_seed ^ hash_str(&episode.episode_id);
     // the budget counts from the first observation on (setup excluded)
     let clock = Instant::now();
+    // One frame buffer for the whole episode, rendered into at every step.
+    let mut frame = needs_frames.then(|| Frame {
+        width: 0,
+        height: 0,
+        pose: sim
+            .camera()
+            .pose_at(&agent.position(), agent.yaw(), agent.pitch()),
+        depth: Vec::new(),
+        instance: Vec::new(),
+        rgb: None,
+    });
     let counted = |clock: &Instant, policy: &dyn Policy| {
         clock.elapsed().as_secs_f64() - policy.simulated_wait_s().max(0.0)
     };
@@ -350,8 +370,9 @@ pub fn run_episode(
             break LoopEnd::Timeout;
         }
         let ts = Instant::now();
-        let frame =
-            needs_frames.then(|| sim.observe_frame(&agent, seed_base.wrapping_add(actions as u64)));
+        if let Some(frame) = frame.as_mut() {
+            sim.observe_frame_into(&agent, seed_base.wrapping_add(actions as u64), frame);
+        }
         let obs = Observation {
             frame: frame.as_ref(),
             position: agent.position(),

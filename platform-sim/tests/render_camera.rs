@@ -699,3 +699,63 @@ fn every_kernel_renders_the_same_frame() {
         }
     }
 }
+
+/// `render_into` a frame that held another image (another pose, another
+/// size, RGB or not) gives exactly the frame `render` returns, noise
+/// included; an invalid pose clears it.
+#[test]
+fn render_into_a_used_frame_equals_render() {
+    use sornav_platform_sim::noise::NoiseConfig;
+    use sornav_platform_sim::{NavMesh, NavMeshConfig};
+    let scene = common::house(2, 1);
+    let nav = NavMesh::build(&scene, &NavMeshConfig::default()).unwrap();
+    let noisy = CameraConfig {
+        width: 96,
+        height: 72,
+        rgb: true,
+        noise: NoiseConfig {
+            depth_sigma: 0.02,
+            missing_rate: 0.05,
+            missed_detection_rate: 0.1,
+            ..NoiseConfig::default()
+        },
+        ..CameraConfig::default()
+    };
+    let cameras = [
+        Camera::for_scene(&scene, CameraConfig::default()).unwrap(),
+        Camera::for_scene(&scene, noisy).unwrap(),
+        Camera::for_scene(
+            &scene,
+            CameraConfig {
+                width: 37,
+                height: 21,
+                ..CameraConfig::default()
+            },
+        )
+        .unwrap(),
+    ];
+    let mut frame = cameras[0].render(&cameras[0].pose_at(&nav.span_center(0), 0.0, 0.0), 0);
+    for k in 0..9u32 {
+        let camera = &cameras[k as usize % 3];
+        let feet = nav.span_center((k as usize * nav.span_count() / 9) as u32);
+        let pose = camera.pose_at(&feet, f64::from(k) * 1.3, 0.0);
+        camera.render_into(&pose, u64::from(k), &mut frame);
+        let fresh = camera.render(&pose, u64::from(k));
+        assert!(frame == fresh, "pose {k}");
+    }
+    let bad = CameraPose {
+        position: Point3::new(f64::NAN, 0.0, 1.0),
+        yaw: 0.0,
+        pitch: 0.0,
+    };
+    cameras[1].render_into(&bad, 0, &mut frame);
+    assert!(
+        frame.depth.iter().all(|d| *d == 0.0) && frame.instance.iter().all(|i| *i == NO_INSTANCE)
+    );
+    assert!(
+        frame
+            .rgb
+            .as_ref()
+            .is_some_and(|c| c.iter().all(|p| *p == [0; 3]))
+    );
+}

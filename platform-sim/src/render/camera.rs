@@ -397,11 +397,40 @@ impl Camera {
     /// # Complexity
     /// O(W H log T) expected for a W x H image and T triangles.
     pub fn render(&self, pose: &CameraPose, frame_seed: u64) -> Frame {
+        let mut frame = Frame {
+            width: 0,
+            height: 0,
+            pose: *pose,
+            depth: Vec::new(),
+            instance: Vec::new(),
+            rgb: None,
+        };
+        self.render_into(pose, frame_seed, &mut frame);
+        frame
+    }
+
+    /// [`Camera::render`] into `frame`, reusing its buffers: no allocation
+    /// and no clearing once they are large enough (every pixel is written).
+    /// The frame's previous contents are replaced entirely; the result is
+    /// the frame [`Camera::render`] returns.
+    ///
+    /// # Complexity
+    /// As [`Camera::render`].
+    pub fn render_into(&self, pose: &CameraPose, frame_seed: u64, frame: &mut Frame) {
         let c = &self.config;
         let (w, h) = (c.width as usize, c.height as usize);
-        let mut depth = vec![0f32; w * h];
-        let mut instance = vec![NO_INSTANCE; w * h];
-        let mut rgb = c.rgb.then(|| vec![[0u8; 3]; w * h]);
+        frame.width = c.width;
+        frame.height = c.height;
+        frame.pose = *pose;
+        let mut depth = std::mem::take(&mut frame.depth);
+        let mut instance = std::mem::take(&mut frame.instance);
+        depth.resize(w * h, 0.0);
+        instance.resize(w * h, NO_INSTANCE);
+        let mut rgb = c.rgb.then(|| {
+            let mut rgb = frame.rgb.take().unwrap_or_default();
+            rgb.resize(w * h, [0; 3]);
+            rgb
+        });
         let (f, r, up) = pose.axes();
         let to32 = |v: Vector3<f64>| [v.x as f32, v.y as f32, v.z as f32];
         let (f, r, up) = (to32(f), to32(r), to32(up));
@@ -423,6 +452,14 @@ impl Camera {
             .max(dmax);
         let sem_max = c.semantic_max_depth.map_or(f32::INFINITY, |d| d as f32);
         let valid_pose = origin.iter().chain(f.iter()).all(|x| x.is_finite());
+        if !valid_pose {
+            // No rays: an empty frame.
+            depth.fill(0.0);
+            instance.fill(NO_INSTANCE);
+            if let Some(rgb) = rgb.as_mut() {
+                rgb.fill([0; 3]);
+            }
+        }
         let render_band = |band: usize,
                            drows: &mut [f32],
                            irows: &mut [u32],
@@ -484,6 +521,7 @@ impl Camera {
                     };
                     for (i, c) in crows[row].iter_mut().enumerate() {
                         let Some(tri) = self.bvh.triangles().get(slot[i] as usize) else {
+                            *c = [0; 3];
                             continue;
                         };
                         let hit = BvhHit {
@@ -511,18 +549,12 @@ impl Camera {
                 .enumerate()
                 .for_each(|(band, (d, i))| render_band(band, d, i, None)),
         }
-        let mut frame = Frame {
-            width: c.width,
-            height: c.height,
-            pose: *pose,
-            depth,
-            instance,
-            rgb,
-        };
+        frame.depth = depth;
+        frame.instance = instance;
+        frame.rgb = rgb;
         if let Some(noise) = &self.noise {
-            noise.apply(&mut frame, frame_seed);
+            noise.apply(frame, frame_seed);
         }
-        frame
     }
 
     /// Colour by category, shaded by the angle between surface and ray.
