@@ -16,6 +16,11 @@
 //!
 //! `cargo run --release -p sornav-examples --example bench_sim [-- EPISODES [WxH]]`
 //! (`WxH`: one resolution only, say `640x480`, for profiling one of them).
+//!
+//! `BENCH_SIM_WALL_CLOCK_S=SECONDS` replaces the 120 s wall-clock budget
+//! of an episode (say `1e9` under valgrind, where the budget would cut
+//! episodes short and before/after runs would not cover the same
+//! actions).
 
 use std::time::Instant;
 
@@ -71,6 +76,13 @@ fn main() {
         }
         None => vec![(160, 120), (640, 480)],
     };
+    let run_config = RunConfig {
+        wall_clock_s: std::env::var("BENCH_SIM_WALL_CLOCK_S")
+            .ok()
+            .map(|s| s.parse().expect("BENCH_SIM_WALL_CLOCK_S: seconds"))
+            .unwrap_or(RunConfig::default().wall_clock_s),
+        ..RunConfig::default()
+    };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
@@ -123,7 +135,7 @@ fn main() {
                 };
                 let t0 = Instant::now();
                 let r = pool
-                    .install(|| run_episode(&sim, e, &mut recording, &RunConfig::default()))
+                    .install(|| run_episode(&sim, e, &mut recording, &run_config))
                     .expect("episode");
                 walls.push(t0.elapsed().as_secs_f64());
                 let camera = sim.camera();

@@ -189,6 +189,13 @@ impl SceneLabels {
             .copied()
             .unwrap_or_default()
     }
+
+    /// The labels of an instance image, into `out` (replacing its
+    /// contents, keeping its allocation).
+    pub fn labels_into(&self, instances: &[u32], out: &mut Vec<LabelId>) {
+        out.clear();
+        out.extend(instances.iter().map(|&i| self.label(i)));
+    }
 }
 
 /// Builds the agent for one episode (the maps start empty every episode,
@@ -301,6 +308,9 @@ pub struct SornavPolicy<F> {
     mount: f64,
     half_vfov: f64,
     trace: EpisodeTrace,
+    /// The depth and label buffers of the last observation, refilled by
+    /// the next one (a frame's buffers are not allocated again).
+    spare: Option<DepthObservation>,
     /// `SORNAV_DEBUG` is set: log every dispatch to stderr.
     debug: bool,
     /// `SORNAV_DEBUG_ACTIONS` is set: log every action to stderr.
@@ -356,6 +366,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
             mount: 0.88,
             half_vfov: 0.55,
             trace: EpisodeTrace::default(),
+            spare: None,
             debug: std::env::var_os("SORNAV_DEBUG").is_some(),
             debug_actions: std::env::var_os("SORNAV_DEBUG_ACTIONS").is_some(),
             debug_frames: std::env::var_os("SORNAV_DEBUG_FRAMES").map(std::path::PathBuf::from),
@@ -390,13 +401,21 @@ impl<F: AgentFactory> SornavPolicy<F> {
         Point3::new(p.x, p.y, p.z - self.floor_z)
     }
 
-    /// The agent's observation of a simulator frame.
-    fn observation(&self, obs: &sornav_platform_sim::Observation<'_>) -> Option<Observation> {
+    /// The agent's observation of a simulator frame (in the buffers of the
+    /// last one, see [`recycle`](Self::recycle)).
+    fn observation(&mut self, obs: &sornav_platform_sim::Observation<'_>) -> Option<Observation> {
         let frame = obs.frame?;
         let (camera, mount) = self.camera.as_ref()?;
         let labels = self.labels.as_ref()?;
         let feet = self.to_local(&obs.position);
         let eye = Point3::new(feet.x, feet.y, feet.z + mount);
+        let (mut depth, mut label_image) = self
+            .spare
+            .take()
+            .map_or_else(Default::default, |d| (d.depth, d.labels));
+        depth.clear();
+        depth.extend_from_slice(&frame.depth);
+        labels.labels_into(&frame.instance, &mut label_image);
         Some(Observation {
             pose: RobotPose::new(feet, obs.yaw),
             sensor: Sensor::Depth(DepthObservation {
@@ -404,10 +423,17 @@ impl<F: AgentFactory> SornavPolicy<F> {
                 // The simulator's pitch is positive up; the optical pose
                 // takes a downward tilt.
                 camera_pose: optical_pose(&eye, obs.yaw, -obs.pitch),
-                depth: frame.depth.clone(),
-                labels: frame.instance.iter().map(|&i| labels.label(i)).collect(),
+                depth,
+                labels: label_image,
             }),
         })
+    }
+
+    /// Keeps an observed frame's buffers for the next observation.
+    fn recycle(&mut self, observation: Observation) {
+        if let Sensor::Depth(d) = observation.sensor {
+            self.spare = Some(d);
+        }
     }
 
     fn now(&self, step: usize) -> Duration {
@@ -692,12 +718,13 @@ impl<F: AgentFactory> SornavPolicy<F> {
             return Action::Stop;
         }
         let t0 = Instant::now();
-        let observation = self.observation(obs);
-        if let Some(o) = &observation
-            && let Some(agent) = self.agent.as_mut()
-            && let Err(e) = agent.observe(o)
-        {
-            self.error("observe", &e);
+        if let Some(o) = self.observation(obs) {
+            if let Some(agent) = self.agent.as_mut()
+                && let Err(e) = agent.observe(&o)
+            {
+                self.error("observe", &e);
+            }
+            self.recycle(o);
         }
         if step < self.config.scan_turns {
             self.trace.decision_ms.add(t0.elapsed().as_secs_f64() * 1e3);

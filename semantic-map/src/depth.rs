@@ -193,33 +193,34 @@ impl SemanticMap {
             return Err(MapError::NonFinitePose);
         }
         options.validate()?;
-        let (dmin, dmax) = (options.min_depth, options.max_depth);
+        let window = (options.min_depth, options.max_depth);
         let rot = pose.rotation.to_rotation_matrix();
         let t = pose.translation.vector;
         let stride = options.stride as usize;
-        // World-frame ray of pixel (u, v) per unit z-depth = col[u] + row[v].
-        let col: Vec<Vector3<f64>> = (0..w)
+        // World-frame ray of pixel (u, v) per unit z-depth = cols[u] + rows[v].
+        let cols: Vec<Vector3<f64>> = (0..w)
             .step_by(stride)
             .map(|u| rot * Vector3::new((u as f64 - cam.cx) / cam.fx, 0.0, 0.0))
             .collect();
+        let rows: Vec<Vector3<f64>> = (0..h)
+            .step_by(stride)
+            .map(|v| rot * Vector3::new(0.0, (v as f64 - cam.cy) / cam.fy, 1.0))
+            .collect();
         let mut ins = Inserter::new(self);
-        for v in (0..h).step_by(stride) {
-            let row = rot * Vector3::new(0.0, (v as f64 - cam.cy) / cam.fy, 1.0);
+        let within = frame_within_bound(&t, &cols, &rows, window.1, ins.bound());
+        for (v, row) in (0..h).step_by(stride).zip(&rows) {
             let depth_row = &frame.depth[v * w..(v + 1) * w];
             let label_row = &frame.labels[v * w..(v + 1) * w];
-            for (ci, u) in (0..w).step_by(stride).enumerate() {
-                ins.stats.points += 1;
-                let d = f64::from(depth_row[u]);
-                if !d.is_finite() {
-                    ins.stats.rejected_non_finite += 1;
-                    continue;
-                }
-                if !(dmin..=dmax).contains(&d) {
-                    ins.stats.rejected_range += 1;
-                    continue;
-                }
-                let p = t + (col[ci] + row) * d;
-                ins.insert(p.x, p.y, p.z, label_row[u]);
+            ins.stats.points += cols.len() as u64;
+            let ray = Ray { t: &t, row, window };
+            if stride == 1 {
+                ray.fuse(&mut ins, cols.iter().zip(depth_row).zip(label_row), within);
+            } else {
+                let pixels = cols
+                    .iter()
+                    .zip(depth_row.iter().step_by(stride))
+                    .zip(label_row.iter().step_by(stride));
+                ray.fuse(&mut ins, pixels, within);
             }
         }
         let stats = ins.finish();
@@ -228,11 +229,93 @@ impl SemanticMap {
     }
 }
 
+/// Whether every point a frame can produce, `t + (col + row) * d` with
+/// `d <= max_depth` for any of the column and row rays, lies within
+/// `bound` on every axis, by a relative margin far above the rounding of
+/// the few operations that compute a point: then no point needs the
+/// per-point bound check. Non-finite rays never pass.
+fn frame_within_bound(
+    t: &Vector3<f64>,
+    cols: &[Vector3<f64>],
+    rows: &[Vector3<f64>],
+    max_depth: f64,
+    bound: f64,
+) -> bool {
+    let reach = |rays: &[Vector3<f64>]| {
+        rays.iter()
+            .flat_map(|r| r.iter())
+            .try_fold(0.0f64, |m, c| c.is_finite().then(|| m.max(c.abs())))
+    };
+    let (Some(col), Some(row)) = (reach(cols), reach(rows)) else {
+        return false;
+    };
+    let extent = t.amax() + (col + row) * max_depth;
+    extent.is_finite() && extent * (1.0 + 1e-9) <= bound
+}
+
+/// One image row's rays: the camera position `t`, the row's part of the
+/// pixel rays and the depth window `(min, max)`.
+struct Ray<'a> {
+    t: &'a Vector3<f64>,
+    row: &'a Vector3<f64>,
+    window: (f64, f64),
+}
+
+impl Ray<'_> {
+    /// Fuses a row's pixels (column ray, depth, label) in order; `within`:
+    /// [`frame_within_bound`] holds, so no per-point bound check.
+    #[inline(always)]
+    fn fuse<'p>(
+        &self,
+        ins: &mut Inserter<'_>,
+        pixels: impl Iterator<Item = ((&'p Vector3<f64>, &'p f32), &'p LabelId)>,
+        within: bool,
+    ) {
+        if within {
+            self.fuse_pixels::<false>(ins, pixels);
+        } else {
+            self.fuse_pixels::<true>(ins, pixels);
+        }
+    }
+
+    /// [`fuse`](Self::fuse), with the per-point bound check when `CHECKED`.
+    #[inline(always)]
+    fn fuse_pixels<'p, const CHECKED: bool>(
+        &self,
+        ins: &mut Inserter<'_>,
+        pixels: impl Iterator<Item = ((&'p Vector3<f64>, &'p f32), &'p LabelId)>,
+    ) {
+        let (t, row, (dmin, dmax)) = (self.t, self.row, self.window);
+        for ((col, &depth), &label) in pixels {
+            let d = f64::from(depth);
+            // False for NaN and, the window being finite, for infinities.
+            if !(dmin <= d && d <= dmax) {
+                if d.is_finite() {
+                    ins.stats.rejected_range += 1;
+                } else {
+                    ins.stats.rejected_non_finite += 1;
+                }
+                continue;
+            }
+            // `t + (col + row) * d`, operation for operation.
+            let x = t.x + (col.x + row.x) * d;
+            let y = t.y + (col.y + row.y) * d;
+            let z = t.z + (col.z + row.z) * d;
+            if CHECKED {
+                ins.insert(x, y, z, label);
+            } else {
+                ins.insert_within_bound(x, y, z, label);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::{LabelSet, MapConfig, VoxelKey};
     use approx::assert_relative_eq;
+    use proptest::prelude::*;
 
     #[test]
     fn back_projection_hand_computed() {
@@ -322,6 +405,116 @@ mod tests {
         };
         let s = map2.integrate_depth(&frame, &opts).unwrap();
         assert_eq!((s.points, s.accepted, s.rejected_non_finite), (2, 1, 1));
+    }
+
+    /// The per-pixel path as first written (every pixel through the
+    /// bound-checked [`Inserter::insert`], a range test per pixel, the
+    /// rays summed as vectors): the reference the row kernel must
+    /// reproduce, state and counters alike.
+    fn reference_integrate_depth(
+        map: &mut SemanticMap,
+        frame: &DepthFrame<'_>,
+        options: &DepthOptions,
+    ) -> IntegrationStats {
+        let cam = frame.camera;
+        let (w, h) = (cam.width as usize, cam.height as usize);
+        let (dmin, dmax) = (options.min_depth, options.max_depth);
+        let rot = frame.pose.rotation.to_rotation_matrix();
+        let t = frame.pose.translation.vector;
+        let stride = options.stride as usize;
+        let col: Vec<Vector3<f64>> = (0..w)
+            .step_by(stride)
+            .map(|u| rot * Vector3::new((u as f64 - cam.cx) / cam.fx, 0.0, 0.0))
+            .collect();
+        let mut ins = Inserter::new(map);
+        for v in (0..h).step_by(stride) {
+            let row = rot * Vector3::new(0.0, (v as f64 - cam.cy) / cam.fy, 1.0);
+            for (ci, u) in (0..w).step_by(stride).enumerate() {
+                ins.stats.points += 1;
+                let d = f64::from(frame.depth[v * w + u]);
+                if !d.is_finite() {
+                    ins.stats.rejected_non_finite += 1;
+                    continue;
+                }
+                if !(dmin..=dmax).contains(&d) {
+                    ins.stats.rejected_range += 1;
+                    continue;
+                }
+                let p = t + (col[ci] + row) * d;
+                ins.insert(p.x, p.y, p.z, frame.labels[v * w + u]);
+            }
+        }
+        let stats = ins.finish();
+        map.integrations += 1;
+        stats
+    }
+
+    /// A depth value: mostly in a window around `[0.5, 5]`, sometimes
+    /// missing (0, NaN, infinities) or negative.
+    fn depth_value() -> impl Strategy<Value = f32> {
+        prop_oneof![
+            6 => 0.3f32..6.0,
+            1 => Just(0.0f32),
+            1 => Just(f32::NAN),
+            1 => Just(f32::INFINITY),
+            1 => Just(f32::NEG_INFINITY),
+            1 => -1.0f32..0.0,
+        ]
+    }
+
+    proptest! {
+        /// The row kernel (frame-wide bound test, per-row rays, merged
+        /// window test) gives the same map, block order, pending changes
+        /// and counters as the per-pixel reference, over frames with
+        /// missing and out-of-window depths, strides, poses near and
+        /// beyond the coordinate bound, and runs that continue across rows
+        /// and frames.
+        #[test]
+        fn row_kernel_matches_per_pixel_reference(
+            (w, h) in (1u32..12, 1u32..10),
+            f in 2.0f64..40.0,
+            centre in (-3.0f64..3.0, -3.0f64..3.0),
+            eye in (-6.0f64..6.0, -6.0f64..6.0, -1.0f64..3.0),
+            yaw in -3.2f64..3.2,
+            pitch in -0.6f64..0.6,
+            resolution in prop_oneof![Just(0.05), Just(0.25), Just(1.0)],
+            bound in prop_oneof![Just(100_000.0), Just(4.0), Just(8.0)],
+            stride in 1u32..4,
+            frames in prop::collection::vec(
+                (prop::collection::vec(depth_value(), 132), prop::collection::vec(0u16..4, 132)),
+                1..3,
+            ),
+        ) {
+            let cam = PinholeCamera {
+                width: w,
+                height: h,
+                fx: f,
+                fy: f * 1.1,
+                cx: f64::from(w) / 2.0 + centre.0,
+                cy: f64::from(h) / 2.0 + centre.1,
+            };
+            let pose = optical_pose(&Point3::new(eye.0, eye.1, eye.2), yaw, pitch);
+            let config = MapConfig {
+                max_abs_coordinate: bound,
+                ..MapConfig::with_resolution(resolution)
+            };
+            let labels = LabelSet::household();
+            let mut fast = SemanticMap::new(config, labels.clone()).unwrap();
+            let mut slow = SemanticMap::new(config, labels).unwrap();
+            let options = DepthOptions { stride, ..DepthOptions::default() };
+            let n = (w * h) as usize;
+            for (depth, label) in &frames {
+                let label: Vec<LabelId> = label[..n].iter().map(|&l| LabelId(l)).collect();
+                let frame = DepthFrame { camera: &cam, pose: &pose, depth: &depth[..n], labels: &label };
+                let a = fast.integrate_depth(&frame, &options).unwrap();
+                let b = reference_integrate_depth(&mut slow, &frame, &options);
+                prop_assert_eq!(a, b);
+                prop_assert_eq!(&fast.grid.keys, &slow.grid.keys);
+                prop_assert_eq!(&fast.dirty, &slow.dirty);
+                prop_assert_eq!(&fast.touched, &slow.touched);
+                prop_assert_eq!(fast.snapshot(), slow.snapshot());
+            }
+        }
     }
 
     #[test]

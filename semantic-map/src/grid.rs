@@ -148,8 +148,7 @@ impl<'a> GridCursor<'a> {
     #[inline(always)]
     pub(crate) fn locate(&mut self, key: &VoxelKey) -> Option<(&'a Block, usize)> {
         let bk = key.block();
-        let slot = ((bk.x & 1) | ((bk.y & 1) << 1) | ((bk.z & 1) << 2)) as usize;
-        let entry = &mut self.slots[slot];
+        let entry = &mut self.slots[bk.parity_slot()];
         if !entry.2 || entry.0 != bk {
             *entry = (bk, self.grid.find(bk), true);
         }

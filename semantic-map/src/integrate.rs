@@ -74,17 +74,32 @@ impl IntegrationStats {
     }
 }
 
+/// `1.5 * 2^52`: for `|t| < 2^51`, `t + ROUND_SHIFT` lies in `[2^52, 2^53)`,
+/// where doubles are the integers, so the sum is `t` rounded to the nearest
+/// integer, held in the low mantissa bits as two's complement (the `2^51`
+/// of the shift is a multiple of `2^32`).
+const ROUND_SHIFT: f64 = 6_755_399_441_055_744.0;
+
 /// `floor(t)` as `i32` for `|t|` well inside the `i32` range (guaranteed by
-/// the coordinate bound): truncation plus a correction, which compiles to
-/// two instructions instead of a `floor` library call on baseline x86-64.
+/// the coordinate bound, see [`MapConfig::validate`](crate::MapConfig::validate)).
+///
+/// Exact: `t + ROUND_SHIFT` rounds `t` to the nearest integer `n` (both
+/// as a double and in its low 32 bits); `floor(t)` is `n - 1` when `n > t`
+/// (the rounding went up), else `n`. Four arithmetic instructions and a
+/// move, without the saturation checks of an `as` conversion or the
+/// `floor` library call of baseline x86-64.
 #[inline]
 pub(crate) fn fast_floor(t: f64) -> i32 {
-    let i = t as i32;
-    if f64::from(i) > t { i - 1 } else { i }
+    let shifted = t + ROUND_SHIFT;
+    let nearest = shifted - ROUND_SHIFT;
+    // Truncation keeps the low 32 bits: the rounded integer.
+    let n = shifted.to_bits() as i32;
+    n - i32::from(nearest > t)
 }
 
 /// The write path shared by point and depth integration: caches the last
-/// block, records hit bits, touched blocks and object-label changes.
+/// block and eight recent ones (see [`BlockKey::parity_slot`]), records hit
+/// bits, touched blocks and object-label changes.
 pub(crate) struct Inserter<'a> {
     grid: &'a mut VoxelGrid,
     dirty: &'a mut Vec<VoxelKey>,
@@ -94,6 +109,9 @@ pub(crate) struct Inserter<'a> {
     bound: f64,
     last_key: BlockKey,
     last: u32,
+    /// Recently resolved blocks by [`BlockKey::parity_slot`] (index
+    /// `NO_BLOCK`: empty); each is allocated and listed as touched.
+    recent: [(BlockKey, u32); 8],
     pending: [Pending; BATCH],
     len: usize,
     run: Pending,
@@ -112,6 +130,7 @@ impl<'a> Inserter<'a> {
             ignored: &map.ignored,
             last_key: BlockKey { x: 0, y: 0, z: 0 },
             last: NO_BLOCK,
+            recent: [(BlockKey { x: 0, y: 0, z: 0 }, NO_BLOCK); 8],
             pending: [Pending::default(); BATCH],
             len: 0,
             run: Pending::default(),
@@ -122,6 +141,22 @@ impl<'a> Inserter<'a> {
 
     /// Queues one finite, range-checked world point; rejects it (counted)
     /// when a coordinate exceeds the absolute bound.
+    #[inline(always)]
+    pub(crate) fn insert(&mut self, x: f64, y: f64, z: f64, label: LabelId) {
+        if x.abs() > self.bound || y.abs() > self.bound || z.abs() > self.bound {
+            self.stats.rejected_bounds += 1;
+            return;
+        }
+        self.insert_within_bound(x, y, z, label);
+    }
+
+    /// The coordinate bound ([`MapConfig::max_abs_coordinate`](crate::MapConfig::max_abs_coordinate)).
+    pub(crate) fn bound(&self) -> f64 {
+        self.bound
+    }
+
+    /// Queues one finite, range-checked world point whose coordinates the
+    /// caller proved within the absolute bound (see [`insert`](Self::insert)).
     ///
     /// Points are applied in input order, in two stages: runs of consecutive
     /// points with the same voxel and label are merged (one evidence update
@@ -130,11 +165,7 @@ impl<'a> Inserter<'a> {
     /// misses of scattered scans (LiDAR) overlap instead of serialising; the
     /// second pass updates the (now cached) cells.
     #[inline(always)]
-    pub(crate) fn insert(&mut self, x: f64, y: f64, z: f64, label: LabelId) {
-        if x.abs() > self.bound || y.abs() > self.bound || z.abs() > self.bound {
-            self.stats.rejected_bounds += 1;
-            return;
-        }
+    pub(crate) fn insert_within_bound(&mut self, x: f64, y: f64, z: f64, label: LabelId) {
         self.stats.accepted += 1;
         let key = VoxelKey::new(
             fast_floor(x * self.inv_res),
@@ -173,17 +204,8 @@ impl<'a> Inserter<'a> {
         self.run.count = 0;
         let bk = key.block();
         if self.last == NO_BLOCK || bk != self.last_key {
-            let mut created = false;
-            self.last = self.grid.find_or_insert(bk, &mut created);
+            self.last = self.resolve(bk);
             self.last_key = bk;
-            if created {
-                self.stats.new_blocks += 1;
-            }
-            let block = &mut self.grid.blocks[self.last as usize];
-            if !block.touched {
-                block.touched = true;
-                self.touched.push(self.last);
-            }
         }
         let i = key.index_in_block();
         // Early load of the target cell (the value only feeds `sink`).
@@ -200,6 +222,29 @@ impl<'a> Inserter<'a> {
         if self.len == BATCH {
             self.flush();
         }
+    }
+
+    /// The index of block `bk`, allocated (counted) and listed as touched
+    /// when first met; blocks met again soon are not hashed again.
+    #[inline]
+    fn resolve(&mut self, bk: BlockKey) -> u32 {
+        let slot = bk.parity_slot();
+        let (key, index) = self.recent[slot];
+        if index != NO_BLOCK && key == bk {
+            return index;
+        }
+        let mut created = false;
+        let index = self.grid.find_or_insert(bk, &mut created);
+        if created {
+            self.stats.new_blocks += 1;
+        }
+        let block = &mut self.grid.blocks[index as usize];
+        if !block.touched {
+            block.touched = true;
+            self.touched.push(index);
+        }
+        self.recent[slot] = (bk, index);
+        index
     }
 
     /// Applies the queued points in order.
@@ -362,10 +407,56 @@ mod tests {
 
     #[test]
     fn fast_floor_matches_floor() {
+        let limit = f64::from(i32::MAX / 4);
         for t in [
-            -2.5, -2.0, -1e-12, -0.0, 0.0, 1e-12, 0.999_999, 1.0, 3.7, -3.7, 1e8, -1e8,
+            -2.5,
+            -2.0,
+            -1e-12,
+            -0.0,
+            0.0,
+            1e-12,
+            0.999_999,
+            1.0,
+            3.7,
+            -3.7,
+            1e8,
+            -1e8,
+            0.5,
+            -0.5,
+            1.5,
+            -1.5,
+            1.0 - f64::EPSILON / 2.0,
+            -1.0 + f64::EPSILON / 2.0,
+            -f64::MIN_POSITIVE,
+            limit,
+            -limit,
+            limit - 0.5,
+            -limit + 0.5,
         ] {
             assert_eq!(fast_floor(t), t.floor() as i32, "{t}");
+        }
+    }
+
+    proptest::proptest! {
+        /// The shifted rounding equals `floor` on the whole index range,
+        /// halves and near-integers included.
+        #[test]
+        fn fast_floor_is_floor(
+            t in -f64::from(i32::MAX / 4)..f64::from(i32::MAX / 4),
+            n in -(i32::MAX / 4)..(i32::MAX / 4),
+            ulps in 0usize..4,
+        ) {
+            proptest::prop_assert_eq!(fast_floor(t), t.floor() as i32);
+            // Integers, halves and their floating-point neighbours.
+            for base in [f64::from(n), f64::from(n) + 0.5] {
+                let (mut up, mut down) = (base, base);
+                for _ in 0..ulps {
+                    (up, down) = (up.next_up(), down.next_down());
+                }
+                for u in [base, up, down] {
+                    proptest::prop_assert_eq!(fast_floor(u), u.floor() as i32, "{}", u);
+                }
+            }
         }
     }
 

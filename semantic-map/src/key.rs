@@ -130,6 +130,15 @@ pub(crate) struct BlockKey {
 }
 
 impl BlockKey {
+    /// Slot `0..8` of the block in an eight-entry cache indexed by the
+    /// parities of its coordinates: the (up to) eight blocks around any
+    /// voxel's 26-neighbourhood, or on either side of a block border, land
+    /// in distinct slots.
+    #[inline]
+    pub(crate) fn parity_slot(&self) -> usize {
+        ((self.x & 1) | ((self.y & 1) << 1) | ((self.z & 1) << 2)) as usize
+    }
+
     /// The key of voxel `index` (see [`VoxelKey::index_in_block`]) of this block.
     #[inline]
     pub(crate) fn voxel(&self, index: usize) -> VoxelKey {
