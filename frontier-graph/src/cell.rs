@@ -67,11 +67,28 @@ pub fn cell_of(
     what: &'static str,
     index: usize,
 ) -> Result<Cell, FrontierError> {
+    scaled_cell_of(p, resolution, what, index).map(|(_, cell)| cell)
+}
+
+/// [`cell_of`], also returning `p` in cell units (`p / resolution`, the
+/// coordinates the cell is the floor of), for a caller that goes on to
+/// walk a ray there ([`crate::raycast::RayOrigin::ray_to`]).
+///
+/// # Errors
+/// As [`cell_of`].
+#[inline]
+pub(crate) fn scaled_cell_of(
+    p: &Point2<f64>,
+    resolution: f64,
+    what: &'static str,
+    index: usize,
+) -> Result<((f64, f64), Cell), FrontierError> {
     if !p.x.is_finite() || !p.y.is_finite() {
         return Err(FrontierError::NonFinite { what, index });
     }
-    match (cell_coord(p.x / resolution), cell_coord(p.y / resolution)) {
-        (Some(x), Some(y)) => Ok(Cell::new(x, y)),
+    let (sx, sy) = (p.x / resolution, p.y / resolution);
+    match (cell_coord(sx), cell_coord(sy)) {
+        (Some(x), Some(y)) => Ok(((sx, sy), Cell::new(x, y))),
         _ => Err(FrontierError::OutOfRange {
             what,
             x: p.x,

@@ -32,15 +32,39 @@ pub(crate) struct Ray {
     left_y: u32,
 }
 
-impl Ray {
-    /// The ray of the segment `a -> b` (world metres) over cells of size
-    /// `res`. Callers validated both points (finite, |coord| < 2^24 cells).
+/// The start of rays that share it (a scan's sensor origin): its
+/// coordinates in cell units and its cell, computed once for all of them.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RayOrigin {
+    sx: f64,
+    sy: f64,
+    cx: i32,
+    cy: i32,
+}
+
+impl RayOrigin {
+    /// The origin `a` (world metres) over cells of size `res`; `a` was
+    /// validated (finite, |coord| < 2^24 cells).
     #[inline]
-    pub(crate) fn new(a: &Point2<f64>, b: &Point2<f64>, res: f64) -> Self {
+    pub(crate) fn new(a: &Point2<f64>, res: f64) -> Self {
         let (sx, sy) = (a.x / res, a.y / res);
-        let (ex, ey) = (b.x / res, b.y / res);
-        let (cx, cy) = (floor_i32(sx), floor_i32(sy));
-        let (tx, ty) = (floor_i32(ex), floor_i32(ey));
+        Self {
+            sx,
+            sy,
+            cx: floor_i32(sx),
+            cy: floor_i32(sy),
+        }
+    }
+
+    /// The ray from this origin to the end `(ex, ey)` in cell units (the
+    /// end in world metres divided by the resolution), whose cell `end`
+    /// (the floors of `ex` and `ey`) the caller computed while validating
+    /// it ([`crate::cell::scaled_cell_of`]): the ray [`Ray::new`] builds,
+    /// without dividing and flooring again.
+    #[inline]
+    pub(crate) fn ray_to(&self, (ex, ey): (f64, f64), end: Cell) -> Ray {
+        let Self { sx, sy, cx, cy } = *self;
+        let (tx, ty) = (end.x, end.y);
         let (dx, dy) = (ex - sx, ey - sy);
         let step_x = if dx > 0.0 { 1 } else { -1 };
         let step_y = if dy > 0.0 { 1 } else { -1 };
@@ -71,7 +95,7 @@ impl Ray {
         // Exactly |tx - cx| + |ty - cy| moves reach the end cell (the step
         // signs point at it); counting them also guards against
         // floating-point drift.
-        Self {
+        Ray {
             start: Cell::new(cx, cy),
             step_x,
             step_y,
@@ -82,6 +106,16 @@ impl Ray {
             left_x: (tx - cx).unsigned_abs(),
             left_y: (ty - cy).unsigned_abs(),
         }
+    }
+}
+
+impl Ray {
+    /// The ray of the segment `a -> b` (world metres) over cells of size
+    /// `res`. Callers validated both points (finite, |coord| < 2^24 cells).
+    #[inline]
+    pub(crate) fn new(a: &Point2<f64>, b: &Point2<f64>, res: f64) -> Self {
+        let (ex, ey) = (b.x / res, b.y / res);
+        RayOrigin::new(a, res).ray_to((ex, ey), Cell::new(floor_i32(ex), floor_i32(ey)))
     }
 
     /// The cell of the segment's start.
@@ -274,5 +308,27 @@ mod tests {
             let ray = Ray::new(&a, &b, res);
             prop_assert_eq!(ray.moves() + 1, reference_traverse(&a, &b, res).len());
         }
+
+        /// Differential: a ray built from a shared [`RayOrigin`] and the
+        /// end's validated cell ([`crate::cell::scaled_cell_of`]), as the
+        /// occupancy grid builds its scan's rays, visits the cells of the
+        /// reference.
+        #[test]
+        fn ray_from_origin_matches_the_reference(
+            ax in coordinate(), ay in coordinate(),
+            bx in coordinate(), by in coordinate(),
+            res in prop_oneof![Just(0.05), Just(0.1), 0.01f64..1.0],
+        ) {
+            let (a, b) = (Point2::new(ax, ay), Point2::new(bx, by));
+            prop_assume!((ax - bx).abs() / res + (ay - by).abs() / res < 1.0e5);
+            let (scaled, end) = crate::cell::scaled_cell_of(&b, res, "b", 0).unwrap();
+            let ray = RayOrigin::new(&a, res).ray_to(scaled, end);
+            let (sx, sy) = ray.direction();
+            let start = ray.start();
+            let mut cells = Vec::new();
+            ray.walk(start, |c| c.offset(sx, 0), |c| c.offset(0, sy), |c| cells.push(c));
+            prop_assert_eq!(cells, reference_traverse(&a, &b, res));
+        }
+
     }
 }
