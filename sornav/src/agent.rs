@@ -35,7 +35,7 @@ use crate::snapshot::{
     OccupancyRaster, RelocationRecord,
 };
 use crate::target::{Target, Vocabulary};
-use crate::view::{FLOOR_TOLERANCE_M, ObjectView, Viewer};
+use crate::view::{FLOOR_TOLERANCE_M, ObjectView, Sight, Viewer};
 use sornav_semantic_map::VoxelKey;
 
 /// A context policy the agent can own.
@@ -118,8 +118,11 @@ impl MotionStack for Outbox {
 enum StopView {
     /// Not at a view point: this command moves the robot to one.
     Move(AgentCommand),
-    /// At a view point: stop.
+    /// At a clear view point: stop.
     InView,
+    /// At a view point that only glimpses the object, with no clear view
+    /// point reachable or the moves used up: stop.
+    Glimpse,
     /// The check is turned off: stop.
     Off,
     /// Stop anyway, for this reason.
@@ -1294,6 +1297,7 @@ impl Agent {
                 let view = match self.stop_in_view(now, object, centre, pose) {
                     StopView::Move(command) => return Err(command),
                     StopView::InView => "in view",
+                    StopView::Glimpse => "in view, glimpsed (no clear view point reached)",
                     StopView::Off => "stop-in-view check off",
                     StopView::GaveUp(why) => {
                         self.stats.stops_out_of_view += 1;
@@ -2148,29 +2152,38 @@ impl Agent {
             return StopView::GaveUp("no observed voxel of the object on the map");
         };
         let viewer = self.viewer();
-        let rule = self.config.approach.view_rule();
         let on_floor = self
             .frontiers
             .level_map(level)
             .is_some_and(|m| pose.position.z - m.config().grid.floor_z <= FLOOR_TOLERANCE_M);
-        if on_floor && view.seen_from(&self.semantic, &pose.position, &viewer, &rule) {
-            return StopView::InView;
-        }
-        if self.stop_moves >= attempts {
-            return StopView::GaveUp("not at a view point after the allowed view-point approaches");
-        }
-        self.stop_moves += 1;
         let arrival = self
             .config
             .approach
             .view_arrival_m
             .min(self.config.executor.nav_to_object.arrival.radius_m);
+        let here = if on_floor {
+            let rule = self.config.approach.view_rule();
+            view.sight(&self.semantic, &pose.position, &viewer, &rule)
+        } else {
+            Sight::Hidden
+        };
+        let demand = match here {
+            Sight::Clear => return StopView::InView,
+            Sight::Glimpse if self.stop_moves >= attempts => return StopView::Glimpse,
+            Sight::Glimpse => ViewDemand::RequireClear,
+            Sight::Hidden if self.stop_moves >= attempts => {
+                return StopView::GaveUp(
+                    "not at a view point after the allowed view-point approaches",
+                );
+            }
+            Sight::Hidden => ViewDemand::Require,
+        };
         let target = ApproachTarget {
             object: &view,
             voxels: &self.semantic,
             viewer,
             arrival_radius_m: arrival,
-            demand: ViewDemand::Require,
+            demand,
         };
         let approach = approach_waypoint(
             &mut self.frontiers,
@@ -2179,6 +2192,10 @@ impl Agent {
             &target,
             &self.config.approach,
         );
+        if here == Sight::Glimpse && !matches!(approach, Ok(Some(_))) {
+            return StopView::Glimpse;
+        }
+        self.stop_moves += 1;
         let Ok(Some((waypoint, path))) = approach else {
             return StopView::GaveUp("no reachable view point");
         };
@@ -2191,10 +2208,17 @@ impl Agent {
         )
         .with_look_at(centre)
         .with_arrival_radius(arrival);
-        let reason = format!(
-            "object {} confirmed but not in view from here: move to a view point",
-            object.0
-        );
+        let reason = if here == Sight::Glimpse {
+            format!(
+                "object {} confirmed but only glimpsed from here: move to a clear view point",
+                object.0
+            )
+        } else {
+            format!(
+                "object {} confirmed but not in view from here: move to a view point",
+                object.0
+            )
+        };
         match self.dispatch_as(
             now,
             DecisionStep::StopInView,
@@ -2204,6 +2228,7 @@ impl Agent {
             reason,
         ) {
             Ok(command) => StopView::Move(command),
+            Err(_) if here == Sight::Glimpse => StopView::Glimpse,
             Err(_) => StopView::GaveUp("the view-point approach was refused"),
         }
     }

@@ -5,7 +5,7 @@ use sornav_frontier_graph::{FrontierError, LevelId, MultiLevelMap};
 use sornav_semantic_map::SemanticMap;
 
 use crate::config::ApproachConfig;
-use crate::view::{FLOOR_TOLERANCE_M, ObjectView, Viewer, distance_to_box};
+use crate::view::{FLOOR_TOLERANCE_M, ObjectView, Sight, ViewRule, Viewer, distance_to_box};
 
 /// A waypoint (on its level's floor) and the executable path to it.
 pub(crate) type Approach = (Point3<f64>, Vec<Point3<f64>>);
@@ -18,6 +18,9 @@ pub(crate) enum ViewDemand {
     Prefer,
     /// View points only: `Ok(None)` when there is none.
     Require,
+    /// Clear view points only ([`Sight::Clear`]): `Ok(None)` when there
+    /// is none.
+    RequireClear,
 }
 
 /// Whether a surface the robot could stand on at `p`'s column lies above
@@ -45,6 +48,79 @@ pub(crate) struct ApproachTarget<'a> {
     pub demand: ViewDemand,
 }
 
+/// The lattice offsets (in steps of `step`) within `radius` of a lattice
+/// point, the point itself excluded.
+fn lattice_disc(step: f64, radius: f64) -> Vec<(i32, i32)> {
+    let r = (radius.max(0.0) / step).min(16.0);
+    let m = r.floor() as i32;
+    let mut out = Vec::new();
+    for di in -m..=m {
+        for dj in -m..=m {
+            if (di, dj) != (0, 0) && f64::from(di * di + dj * dj) <= r * r + 1e-9 {
+                out.push((di, dj));
+            }
+        }
+    }
+    out
+}
+
+/// The sight of the object from the poses of a square lattice, each
+/// judged once: `None` where the robot cannot stand (an untraversable
+/// cell, a raised surface).
+struct SightLattice<'a> {
+    map: &'a MultiLevelMap,
+    level: LevelId,
+    target: &'a ApproachTarget<'a>,
+    rule: ViewRule,
+    /// Lattice point (0, 0).
+    origin: Point2<f64>,
+    /// Feet height (the level's floor).
+    floor: f64,
+    step: f64,
+    /// Points per axis.
+    n: (usize, usize),
+    sights: Vec<Option<Option<Sight>>>,
+}
+
+impl SightLattice<'_> {
+    /// The sight from lattice point `(i, j)` (`None`: no standing there).
+    fn sight(&mut self, i: usize, j: usize) -> Option<Sight> {
+        let k = i * self.n.1 + j;
+        if let Some(sight) = self.sights[k] {
+            return sight;
+        }
+        let p = Point3::new(
+            self.origin.x + i as f64 * self.step,
+            self.origin.y + j as f64 * self.step,
+            self.floor,
+        );
+        let standable = self.map.level_map(self.level).is_some_and(|m| {
+            m.grid()
+                .cell_of(&p.xy())
+                .is_ok_and(|c| m.grid().is_traversable(c))
+        }) && !raised(self.map, &p);
+        let t = self.target;
+        let sight = standable.then(|| t.object.sight(t.voxels, &p, &t.viewer, &self.rule));
+        self.sights[k] = Some(sight);
+        sight
+    }
+
+    /// Whether every standable lattice pose at the `disc` offsets from
+    /// `(i, j)` is a clear view point (offsets off the lattice are not
+    /// judged: the lattice extends the disc beyond the samples).
+    fn settled(&mut self, i: usize, j: usize, disc: &[(i32, i32)]) -> bool {
+        disc.iter().all(|&(di, dj)| {
+            let (Some(a), Some(b)) = (
+                i.checked_add_signed(di as isize),
+                j.checked_add_signed(dj as isize),
+            ) else {
+                return true;
+            };
+            a >= self.n.0 || b >= self.n.1 || self.sight(a, b).is_none_or(|s| s == Sight::Clear)
+        })
+    }
+}
+
 /// A traversable waypoint on `level` within `[min_standoff_m, standoff_m]`
 /// of the object's horizontal bounds that the robot (feet at `robot`, on
 /// any level) can reach, with its executable path (over stairs when the
@@ -54,14 +130,19 @@ pub(crate) struct ApproachTarget<'a> {
 /// Points on a `sample_step_m` lattice around the bounds are kept when
 /// their distance to the bounds is in `[min_standoff_m, standoff_m]` and
 /// their grid cell is traversable (free, outside the inflated obstacles).
-/// With `line_of_sight` (or [`ViewDemand::Require`]) the samples are
+/// With `line_of_sight` (or a demand for view points) the samples are
 /// ranked in tiers:
-/// 1. view points ([`ObjectView::seen_from`], on the floor rather than on
-///    a raised surface) whose reach stays within
-///    `max_reach_m` less `arrival_radius_m`, so that any stop within the
-///    arrival radius of the waypoint is still within reach;
-/// 2. the other view points (within `max_reach_m`);
-/// 3. with [`ViewDemand::Prefer`] only, every sample.
+/// 1. *settled* clear view points ([`ObjectView::sight`], on the floor
+///    rather than on a raised surface): every standable lattice pose
+///    within `arrival_radius_m` of them is a clear view point too, so
+///    that the robot sees the object clearly wherever within the arrival
+///    radius it stops; and whose reach stays within `max_reach_m` less
+///    `arrival_radius_m`, so that any such stop is still within reach;
+/// 2. the other settled clear view points (within `max_reach_m`);
+/// 3. and 4. the same for the other clear view points;
+/// 5. and 6. the same for glimpses (not with
+///    [`ViewDemand::RequireClear`]);
+/// 7. with [`ViewDemand::Prefer`] only, every sample.
 ///
 /// In each tier in turn, the `max_path_queries` candidates nearest to the
 /// robot (Euclidean) are tried with the frontier map's exact shortest path
@@ -71,9 +152,11 @@ pub(crate) struct ApproachTarget<'a> {
 /// unknown.
 ///
 /// # Complexity
-/// O(S P L) for S lattice samples, P <= 48 object points and L voxels per
-/// line of sight, plus `max_path_queries` shortest-path searches (each
-/// O(N) in the traversable cells).
+/// O(S' (P + 27) L) for S' lattice poses (the samples and the lattice
+/// within the arrival radius around them, each judged once), P <= 48
+/// object points and L voxels per line of sight, plus `max_path_queries`
+/// shortest-path searches per tier tried (each O(N) in the traversable
+/// cells).
 pub(crate) fn approach_waypoint(
     map: &mut MultiLevelMap,
     robot: Point3<f64>,
@@ -83,10 +166,10 @@ pub(crate) fn approach_waypoint(
 ) -> Result<Option<Approach>, FrontierError> {
     let ApproachTarget {
         object,
-        voxels,
         viewer,
         arrival_radius_m,
         demand,
+        ..
     } = *target;
     let Some(level_map) = map.level_map(level) else {
         return Ok(None);
@@ -117,24 +200,56 @@ pub(crate) fn approach_waypoint(
                 continue;
             };
             if grid.is_traversable(cell) {
-                samples.push(Point3::new(p.x, p.y, floor));
+                samples.push((i, j, Point3::new(p.x, p.y, floor)));
             }
         }
     }
-    let mut tiers = Vec::with_capacity(3);
-    if config.line_of_sight || demand == ViewDemand::Require {
+    let mut tiers = Vec::with_capacity(7);
+    if config.line_of_sight || demand != ViewDemand::Prefer {
         let rule = config.view_rule();
         let margin = rule.max_reach_m - arrival_radius_m.max(0.0);
-        let (within_margin, within_reach): (Vec<_>, Vec<_>) = samples
+        let disc = lattice_disc(step, arrival_radius_m);
+        let m = disc
             .iter()
-            .copied()
-            .filter(|p| !raised(map, p) && object.seen_from(voxels, p, &viewer, &rule))
-            .partition(|p| object.reach(p, viewer.eye_height) <= margin);
-        tiers.push(within_margin);
-        tiers.push(within_reach);
+            .map(|&(di, dj)| di.unsigned_abs().max(dj.unsigned_abs()) as usize)
+            .max()
+            .unwrap_or(0);
+        let origin = Point2::new(
+            lo.x - reach - m as f64 * step,
+            lo.y - reach - m as f64 * step,
+        );
+        let mut lattice = SightLattice {
+            map,
+            level,
+            target,
+            rule,
+            origin,
+            floor,
+            step,
+            n: (nx + 1 + 2 * m, ny + 1 + 2 * m),
+            sights: vec![None; (nx + 1 + 2 * m) * (ny + 1 + 2 * m)],
+        };
+        // ranked[2 * (0 settled clear, 1 clear, 2 glimpse) + beyond the margin]
+        let mut ranked: [Vec<Point3<f64>>; 6] = Default::default();
+        for &(i, j, p) in &samples {
+            let (i, j) = (i + m, j + m);
+            let kind = match lattice.sight(i, j) {
+                None | Some(Sight::Hidden) => continue,
+                Some(Sight::Glimpse) => 2,
+                Some(Sight::Clear) => usize::from(!lattice.settled(i, j, &disc)),
+            };
+            let far = usize::from(object.reach(&p, viewer.eye_height) > margin);
+            ranked[2 * kind + far].push(p);
+        }
+        let keep = if demand == ViewDemand::RequireClear {
+            4
+        } else {
+            6
+        };
+        tiers.extend(ranked.into_iter().take(keep));
     }
     if demand == ViewDemand::Prefer {
-        tiers.push(samples);
+        tiers.push(samples.into_iter().map(|(_, _, p)| p).collect());
     }
     let robot2 = robot.xy();
     for mut tier in tiers {
@@ -207,7 +322,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(12))]
+        #![proptest_config(ProptestConfig::with_cases(32))]
 
         /// Without the view preference the waypoint is traversable, within
         /// the standoff of the object, reached by an executable path from
@@ -253,8 +368,10 @@ mod tests {
 
         /// A required view point is one ([`ObjectView::seen_from`]), and
         /// with unlimited queries it is the brute-force nearest (by path)
-        /// of the first reachable tier: view points within the reach less
-        /// the arrival radius, else all view points.
+        /// of the first reachable tier: clear view points within the reach
+        /// less the arrival radius, the other clear ones, then the same
+        /// for glimpses. A required clear view point is the nearest of the
+        /// first two tiers, or none.
         #[test]
         fn required_view_point_is_seen_and_matches_brute_force(
             x in 1.5f64..3.0,
@@ -262,36 +379,79 @@ mod tests {
             w in 0.2f64..0.8,
             h in 0.2f64..0.8,
             z in 0.0f64..1.2,
+            k in 1usize..=27,
         ) {
             let mut map = room_with_box(Point2::new(x, y), Point2::new(x + w, y + h));
             let (voxels, keys) = voxel_map(&[solid(x, y, z, x + w, y + h, z + 0.3)]);
             let view = ObjectView::new(&keys[0], voxels.resolution()).unwrap();
             let (lo, hi) = view.footprint();
             let robot = Point3::origin();
-            let config = ApproachConfig { max_path_queries: usize::MAX, ..ApproachConfig::default() };
+            let config = ApproachConfig {
+                max_path_queries: usize::MAX,
+                min_box_samples: k,
+                ..ApproachConfig::default()
+            };
             let rule = config.view_rule();
             let arrival = 0.3;
-            let target = ApproachTarget {
-                object: &view,
-                voxels: &voxels,
-                viewer: LEVEL,
-                arrival_radius_m: arrival,
-                demand: ViewDemand::Require,
+            let sight = |p: &Point3<f64>| view.sight(&voxels, p, &LEVEL, &rule);
+            let near = |p: &Point3<f64>| view.reach(p, LEVEL.eye_height) <= rule.max_reach_m - arrival;
+            // Settled: every traversable pose of the sample lattice within
+            // the arrival radius is clear too (the room has no raised
+            // surface).
+            let settled = |p: &Point3<f64>| {
+                let r = (arrival / config.sample_step_m).floor() as i32;
+                (-r..=r).all(|di| {
+                    (-r..=r).all(|dj| {
+                        let (a, b) = (f64::from(di), f64::from(dj));
+                        let q = Point3::new(
+                            p.x + a * config.sample_step_m,
+                            p.y + b * config.sample_step_m,
+                            p.z,
+                        );
+                        (a * a + b * b).sqrt() * config.sample_step_m > arrival + 1e-9
+                            || !grid(&map).is_traversable(grid(&map).cell_of(&q.xy()).unwrap())
+                            || sight(&q) == Sight::Clear
+                    })
+                })
             };
-            let found = approach_waypoint(&mut map, robot, LevelId(0), &target, &config).unwrap();
-            let seen = |p: &Point3<f64>| view.seen_from(&voxels, p, &LEVEL, &rule);
-            let margin = |p: &Point3<f64>| {
-                seen(p) && view.reach(p, LEVEL.eye_height) <= rule.max_reach_m - arrival
-            };
-            let tier1 = brute_force(&mut map, robot, (lo, hi), &config, margin);
-            let tier2 = brute_force(&mut map, robot, (lo, hi), &config, |p| seen(p) && !margin(p));
-            match found {
-                None => prop_assert!(tier1.is_infinite() && tier2.is_infinite()),
-                Some((p, _)) => {
-                    prop_assert!(seen(&p));
-                    let len = map.path(&robot, &p).unwrap().unwrap().length;
-                    let want = if tier1.is_finite() { tier1 } else { tier2 };
-                    prop_assert!((len - want).abs() < 1e-9, "{} vs {}", len, want);
+            let tiers: Vec<f64> = [
+                (Sight::Clear, Some(true), true),
+                (Sight::Clear, Some(true), false),
+                (Sight::Clear, Some(false), true),
+                (Sight::Clear, Some(false), false),
+                (Sight::Glimpse, None, true),
+                (Sight::Glimpse, None, false),
+            ]
+            .into_iter()
+            .map(|(s, settle, n)| {
+                brute_force(&mut map.clone(), robot, (lo, hi), &config, |p| {
+                    sight(p) == s && settle.is_none_or(|t| settled(p) == t) && near(p) == n
+                })
+            })
+            .collect();
+            for (demand, depth) in [(ViewDemand::Require, 6), (ViewDemand::RequireClear, 4)] {
+                let target = ApproachTarget {
+                    object: &view,
+                    voxels: &voxels,
+                    viewer: LEVEL,
+                    arrival_radius_m: arrival,
+                    demand,
+                };
+                let found = approach_waypoint(&mut map, robot, LevelId(0), &target, &config).unwrap();
+                let want = tiers[..depth].iter().copied().find(|t| t.is_finite());
+                match (found, want) {
+                    (None, None) => {}
+                    (Some((p, _)), Some(want)) => {
+                        prop_assert!(view.seen_from(&voxels, &p, &LEVEL, &rule));
+                        if demand == ViewDemand::RequireClear {
+                            prop_assert_eq!(sight(&p), Sight::Clear);
+                        }
+                        let len = map.path(&robot, &p).unwrap().unwrap().length;
+                        prop_assert!((len - want).abs() < 1e-9, "{} vs {}", len, want);
+                    }
+                    (found, want) => {
+                        return Err(TestCaseError::fail(format!("{found:?} vs {want:?}")));
+                    }
                 }
             }
         }

@@ -135,6 +135,15 @@ pub struct ApproachConfig {
     /// and the `NAV_TO_OBJECT` rule's applies): the robot must end at the
     /// view point, not merely near it. Default 0.2.
     pub view_arrival_m: f64,
+    /// Box samples (of the 27 spread over the object's bounds) a *clear*
+    /// view point sees: stops and view-point waypoints prefer clear views
+    /// to glimpses (2 to `min_box_samples - 1` samples), and a robot that
+    /// only glimpses the confirmed object moves to a clear view point
+    /// first when one is reachable (within `stop_in_view_attempts`). On
+    /// the agent's voxels a glimpse is where the map and the camera
+    /// disagree (a line grazing a voxel, a sample in the open middle of a
+    /// chair's bounds). 2 or less makes every view point clear. Default 8.
+    pub min_box_samples: usize,
 }
 
 impl ApproachConfig {
@@ -144,6 +153,7 @@ impl ApproachConfig {
             max_reach_m: self.max_reach_m,
             min_visible_share: self.min_visible_share,
             vfov_margin_rad: self.vfov_margin_deg.to_radians(),
+            min_box_samples: self.min_box_samples,
         }
     }
 }
@@ -161,6 +171,7 @@ impl Default for ApproachConfig {
             vfov_margin_deg: 3.0,
             stop_in_view_attempts: 2,
             view_arrival_m: 0.2,
+            min_box_samples: 8,
         }
     }
 }
@@ -575,11 +586,12 @@ impl AgentConfig {
             && (0.0..=1.0).contains(&a.min_visible_share)
             && a.vfov_margin_deg.is_finite()
             && (0.0..90.0).contains(&a.vfov_margin_deg)
-            && a.stop_in_view_attempts <= 16)
+            && a.stop_in_view_attempts <= 16
+            && (1..=27).contains(&a.min_box_samples))
         {
             return Err(component(
                 "approach",
-                "need max_reach_m > 0, view_arrival_m > 0, min_visible_share in [0, 1], vfov_margin_deg in [0, 90), stop_in_view_attempts <= 16",
+                "need max_reach_m > 0, view_arrival_m > 0, min_visible_share in [0, 1], vfov_margin_deg in [0, 90), stop_in_view_attempts <= 16, min_box_samples in 1..=27",
             ));
         }
         if !self.commitment.is_valid() {

@@ -30,6 +30,17 @@
 //!   shows voxels while every line to the middle of its bounds ends on
 //!   something else or in open air.
 //!
+//! A pose that passes with only a few box samples is a **glimpse**
+//! ([`Sight::Glimpse`]); with at least the rule's `min_box_samples` it is a
+//! **clear view** ([`Sight::Clear`]). The map decides a line to a box
+//! sample less sharply than the camera: a voxel is up to half its size
+//! larger than the surface it holds, so a line that passes a chair's seat
+//! or a table's edge by a centimetre meets the object on the map and open
+//! air in the world, and a box sample in the open middle of a chair's
+//! bounds counts as seen. Poses that see few samples are where the two
+//! disagree; a clear view sees enough of them that a few grazing lines
+//! more or less do not decide it.
+//!
 //! Occlusion is judged in 3-D on the semantic map's observed voxels, not on
 //! the 2-D occupancy grid: the cabinet under a television or a low table in
 //! front of a sofa is an obstacle on the grid, yet the camera looks over
@@ -113,6 +124,21 @@ pub(crate) struct ViewRule {
     pub min_visible_share: f64,
     /// Margin (rad) inside the vertical field of view.
     pub vfov_margin_rad: f64,
+    /// Box samples a clear view sees (see [`Sight`]).
+    pub min_box_samples: usize,
+}
+
+/// How a pose views an object (see the module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum Sight {
+    /// Not a view point.
+    Hidden,
+    /// A view point seeing fewer than the rule's `min_box_samples` box
+    /// samples (but at least [`MIN_BOX_SAMPLES`], or the rule's number
+    /// when that is smaller).
+    Glimpse,
+    /// A view point seeing at least the rule's `min_box_samples`.
+    Clear,
 }
 
 /// An observed object as the check sees it.
@@ -289,8 +315,9 @@ impl ObjectView {
         })
     }
 
-    /// Whether `feet` is a view point of the object under `rule`; the
-    /// visible share is computed only when the reach allows.
+    /// Whether `feet` is a view point of the object under `rule` (a
+    /// glimpse or a clear view, see [`Self::sight`]).
+    #[cfg(test)]
     pub(crate) fn seen_from(
         &self,
         map: &SemanticMap,
@@ -298,10 +325,38 @@ impl ObjectView {
         viewer: &Viewer,
         rule: &ViewRule,
     ) -> bool {
-        self.reach(feet, viewer.eye_height) <= rule.max_reach_m
+        self.sight(map, feet, viewer, rule) != Sight::Hidden
+    }
+
+    /// How the sensor at `feet` views the object under `rule`; the visible
+    /// share and the box samples are computed only when the cheaper tests
+    /// pass.
+    ///
+    /// # Complexity
+    /// O((P + 27) L) for P <= [`MAX_VIEW_POINTS`] object points and L
+    /// voxels per line.
+    pub(crate) fn sight(
+        &self,
+        map: &SemanticMap,
+        feet: &Point3<f64>,
+        viewer: &Viewer,
+        rule: &ViewRule,
+    ) -> Sight {
+        let visible = self.reach(feet, viewer.eye_height) <= rule.max_reach_m
             && self.middle_in_view(feet, viewer, rule.vfov_margin_rad)
-            && self.visible_share(map, feet, viewer, rule.vfov_margin_rad) >= rule.min_visible_share
-            && self.box_samples_seen(map, feet, viewer, rule.vfov_margin_rad) >= MIN_BOX_SAMPLES
+            && self.visible_share(map, feet, viewer, rule.vfov_margin_rad)
+                >= rule.min_visible_share;
+        if !visible {
+            return Sight::Hidden;
+        }
+        let seen = self.box_samples_seen(map, feet, viewer, rule.vfov_margin_rad);
+        if seen >= rule.min_box_samples {
+            Sight::Clear
+        } else if seen >= MIN_BOX_SAMPLES {
+            Sight::Glimpse
+        } else {
+            Sight::Hidden
+        }
     }
 }
 
@@ -417,6 +472,7 @@ pub(crate) mod tests {
         max_reach_m: 0.85,
         min_visible_share: 0.25,
         vfov_margin_rad: 0.05,
+        min_box_samples: 8,
     };
 
     fn feet(x: f64, y: f64) -> Point3<f64> {
@@ -500,6 +556,63 @@ pub(crate) mod tests {
         assert!(!plant.middle_in_view(&near, &LEVEL, 0.05));
         assert!(!plant.seen_from(&map, &near, &LEVEL, &RULE));
         assert!(plant.middle_in_view(&feet(0.2, 0.0), &LEVEL, 0.05));
+    }
+
+    /// A chair: a seat on four legs (open below the seat) and a back
+    /// along its +x side.
+    fn chair(x: f64, y: f64) -> Vec<Solid> {
+        let mut parts = vec![
+            solid(x, y, 0.42, x + 0.45, y + 0.45, 0.47),
+            solid(x + 0.4, y, 0.47, x + 0.45, y + 0.45, 0.9),
+        ];
+        for (dx, dy) in [(0.0, 0.0), (0.4, 0.0), (0.0, 0.4), (0.4, 0.4)] {
+            parts.push(solid(
+                x + dx,
+                y + dy,
+                0.0,
+                x + dx + 0.05,
+                y + dy + 0.05,
+                0.42,
+            ));
+        }
+        parts
+    }
+
+    #[test]
+    fn a_chair_past_a_table_edge_is_glimpsed_and_clear_beside_it() {
+        // The chair's open side faces -x, where a table top (0.72-0.76 m,
+        // y from -0.6 m) stands in front of it.
+        let mut solids = chair(1.0, 0.0);
+        let n = solids.len();
+        solids.push(solid(0.45, -0.6, 0.72, 0.95, 1.0, 0.76));
+        let (map, keys) = voxel_map(&solids);
+        let all: Vec<VoxelKey> = keys[..n].iter().flatten().copied().collect();
+        let chair = ObjectView::new(&all, map.resolution()).unwrap();
+        let margin = RULE.vfov_margin_rad;
+        // Past the table's corner: the lines to most samples end on the
+        // table top or in the open middle of the chair; a glimpse.
+        let corner = feet(0.8, -0.7);
+        let seen = chair.box_samples_seen(&map, &corner, &LEVEL, margin);
+        assert!(
+            (MIN_BOX_SAMPLES..RULE.min_box_samples).contains(&seen),
+            "{seen}"
+        );
+        assert_eq!(chair.sight(&map, &corner, &LEVEL, &RULE), Sight::Glimpse);
+        // 0.3 m further along the chair's side: a clear view.
+        let beside = feet(1.1, -0.8);
+        assert!(chair.box_samples_seen(&map, &beside, &LEVEL, margin) >= RULE.min_box_samples);
+        assert_eq!(chair.sight(&map, &beside, &LEVEL, &RULE), Sight::Clear);
+        // Behind the table: hidden.
+        assert_eq!(
+            chair.sight(&map, &feet(0.3, 0.2), &LEVEL, &RULE),
+            Sight::Hidden
+        );
+        // A rule asking for one sample calls every view point clear.
+        let lenient = ViewRule {
+            min_box_samples: 1,
+            ..RULE
+        };
+        assert_eq!(chair.sight(&map, &corner, &LEVEL, &lenient), Sight::Clear);
     }
 
     /// Whether the segment `a -> b` meets the cube of voxel `k` (slabs).
@@ -593,6 +706,58 @@ pub(crate) mod tests {
                 if deep {
                     prop_assert!(!clear, "a line through a voxel's middle was clear");
                 }
+            }
+        }
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// [`ObjectView::sight`] against its definition, computed test by
+        /// test: hidden unless reach, middle, share and at least
+        /// `min(2, min_box_samples)` box samples hold; clear from
+        /// `min_box_samples` samples. A stricter rule never makes a view
+        /// clearer.
+        #[test]
+        fn sight_matches_its_definition(
+            fx in -0.5f64..2.5, fy in -1.5f64..1.5,
+            k in 1usize..=27,
+            tx in 0.5f64..1.5, tz in 0.0f64..0.8,
+            occluder in proptest::bool::ANY,
+            panel in proptest::bool::ANY,
+        ) {
+            // A chair, or a thin panel seen from its face or edge-on.
+            let mut solids = if panel {
+                vec![solid(tx, -0.4, tz + 0.3, tx + 0.05, 0.4, tz + 0.8)]
+            } else {
+                chair(tx, -0.2)
+            };
+            let n = solids.len();
+            if occluder {
+                solids.push(solid(tx - 0.6, -1.0, tz, tx - 0.3, 1.0, tz + 0.05));
+            }
+            let (map, keys) = voxel_map(&solids);
+            let all: Vec<VoxelKey> = keys[..n].iter().flatten().copied().collect();
+            let object = ObjectView::new(&all, map.resolution()).unwrap();
+            let p = feet(fx, fy);
+            let rule = ViewRule { min_box_samples: k, ..RULE };
+            let seen = object.box_samples_seen(&map, &p, &LEVEL, rule.vfov_margin_rad);
+            let gates = object.reach(&p, LEVEL.eye_height) <= rule.max_reach_m
+                && object.middle_in_view(&p, &LEVEL, rule.vfov_margin_rad)
+                && object.visible_share(&map, &p, &LEVEL, rule.vfov_margin_rad) >= rule.min_visible_share;
+            let want = if !gates || seen < k.min(MIN_BOX_SAMPLES) {
+                Sight::Hidden
+            } else if seen >= k {
+                Sight::Clear
+            } else {
+                Sight::Glimpse
+            };
+            let got = object.sight(&map, &p, &LEVEL, &rule);
+            prop_assert_eq!(got, want);
+            prop_assert_eq!(object.seen_from(&map, &p, &LEVEL, &rule), want != Sight::Hidden);
+            if k < 27 {
+                let stricter = ViewRule { min_box_samples: k + 1, ..rule };
+                prop_assert!(object.sight(&map, &p, &LEVEL, &stricter) <= got);
             }
         }
     }

@@ -125,6 +125,8 @@ fn unknown_fields_and_bad_values_are_errors() {
         ("approach", "[approach]\nvfov_margin_deg = 90.0\n"),
         ("approach", "[approach]\nview_arrival_m = 0.0\n"),
         ("approach", "[approach]\nstop_in_view_attempts = 17\n"),
+        ("approach", "[approach]\nmin_box_samples = 0\n"),
+        ("approach", "[approach]\nmin_box_samples = 28\n"),
     ] {
         match AgentConfig::from_toml(doc) {
             Err(ConfigError::Component { component: c, .. }) => assert_eq!(c, component, "{doc}"),
