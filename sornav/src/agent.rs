@@ -1297,7 +1297,10 @@ impl Agent {
                 let view = match self.stop_in_view(now, object, centre, pose) {
                     StopView::Move(command) => return Err(command),
                     StopView::InView => "in view",
-                    StopView::Glimpse => "in view, glimpsed (no clear view point reached)",
+                    StopView::Glimpse => {
+                        self.stats.glimpse_stops += 1;
+                        "in view, glimpsed (no clear view point reached)"
+                    }
                     StopView::Off => "stop-in-view check off",
                     StopView::GaveUp(why) => {
                         self.stats.stops_out_of_view += 1;

@@ -241,6 +241,10 @@ pub struct AgentStats {
     /// new frontier ids: thrashing bounded).
     #[serde(default)]
     pub revisit_exclusions: u64,
+    /// STOPs at a view point that only glimpses the target (no clear view
+    /// point reachable, or the allowed moves used up).
+    #[serde(default)]
+    pub glimpse_stops: u64,
 }
 
 /// Everything needed to draw the agent's state (serde).
