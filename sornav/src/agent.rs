@@ -2211,17 +2211,15 @@ impl Agent {
         )
         .with_look_at(centre)
         .with_arrival_radius(arrival);
-        let reason = if here == Sight::Glimpse {
-            format!(
-                "object {} confirmed but only glimpsed from here: move to a clear view point",
-                object.0
-            )
+        let (seen, goal) = if here == Sight::Glimpse {
+            ("only glimpsed", "a clear view point")
         } else {
-            format!(
-                "object {} confirmed but not in view from here: move to a view point",
-                object.0
-            )
+            ("not in view", "a view point")
         };
+        let reason = format!(
+            "object {} confirmed but {seen} from here: move to {goal}",
+            object.0
+        );
         match self.dispatch_as(
             now,
             DecisionStep::StopInView,

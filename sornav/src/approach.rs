@@ -1,7 +1,7 @@
 //! Placing a `NAV_TO_OBJECT` waypoint next to a target candidate.
 
 use nalgebra::{Point2, Point3};
-use sornav_frontier_graph::{FrontierError, LevelId, MultiLevelMap};
+use sornav_frontier_graph::{FrontierError, LevelId, MultiLevelMap, OccupancyGrid};
 use sornav_semantic_map::SemanticMap;
 
 use crate::config::ApproachConfig;
@@ -49,8 +49,8 @@ pub(crate) struct ApproachTarget<'a> {
 }
 
 /// The lattice offsets (in steps of `step`) within `radius` of a lattice
-/// point, the point itself excluded.
-fn lattice_disc(step: f64, radius: f64) -> Vec<(i32, i32)> {
+/// point, the point itself excluded, and the largest offset along an axis.
+fn lattice_disc(step: f64, radius: f64) -> (Vec<(i32, i32)>, usize) {
     let r = (radius.max(0.0) / step).min(16.0);
     let m = r.floor() as i32;
     let mut out = Vec::new();
@@ -61,7 +61,7 @@ fn lattice_disc(step: f64, radius: f64) -> Vec<(i32, i32)> {
             }
         }
     }
-    out
+    (out, m.unsigned_abs() as usize)
 }
 
 /// The sight of the object from the poses of a square lattice, each
@@ -69,7 +69,8 @@ fn lattice_disc(step: f64, radius: f64) -> Vec<(i32, i32)> {
 /// cell, a raised surface).
 struct SightLattice<'a> {
     map: &'a MultiLevelMap,
-    level: LevelId,
+    /// The level's occupancy grid.
+    grid: &'a OccupancyGrid,
     target: &'a ApproachTarget<'a>,
     rule: ViewRule,
     /// Lattice point (0, 0).
@@ -94,11 +95,11 @@ impl SightLattice<'_> {
             self.origin.y + j as f64 * self.step,
             self.floor,
         );
-        let standable = self.map.level_map(self.level).is_some_and(|m| {
-            m.grid()
-                .cell_of(&p.xy())
-                .is_ok_and(|c| m.grid().is_traversable(c))
-        }) && !raised(self.map, &p);
+        let standable = self
+            .grid
+            .cell_of(&p.xy())
+            .is_ok_and(|c| self.grid.is_traversable(c))
+            && !raised(self.map, &p);
         let t = self.target;
         let sight = standable.then(|| t.object.sight(t.voxels, &p, &t.viewer, &self.rule));
         self.sights[k] = Some(sight);
@@ -208,19 +209,14 @@ pub(crate) fn approach_waypoint(
     if config.line_of_sight || demand != ViewDemand::Prefer {
         let rule = config.view_rule();
         let margin = rule.max_reach_m - arrival_radius_m.max(0.0);
-        let disc = lattice_disc(step, arrival_radius_m);
-        let m = disc
-            .iter()
-            .map(|&(di, dj)| di.unsigned_abs().max(dj.unsigned_abs()) as usize)
-            .max()
-            .unwrap_or(0);
+        let (disc, m) = lattice_disc(step, arrival_radius_m);
         let origin = Point2::new(
             lo.x - reach - m as f64 * step,
             lo.y - reach - m as f64 * step,
         );
         let mut lattice = SightLattice {
             map,
-            level,
+            grid,
             target,
             rule,
             origin,
