@@ -7,11 +7,11 @@ use nalgebra::{Point2, Point3};
 use serde::{Deserialize, Serialize};
 use sornav_cluster_graph::{ClusterGraph, ObjectSummary};
 use sornav_executor::{
-    AlwaysValid, Clock, ClusterId as ExecClusterId, Executor, ExecutorEvent,
+    AlwaysValid, Clock, ClusterId as ExecClusterId, Executor, ExecutorEvent, FailureReason,
     FrontierId as ExecFrontierId, Mission, MissionId, MissionKind, MissionOutcome, MissionStatus,
     MotionError, MotionStack, ObjectId as ExecObjectId, RobotPose, Submission,
 };
-use sornav_frontier_graph::{FrontierGraph, FrontierId, LevelId, MultiLevelMap, NodeId};
+use sornav_frontier_graph::{FrontierGraph, FrontierId, LevelId, Location, MultiLevelMap, NodeId};
 use sornav_semantic_map::{DepthFrame, LabelId, SemanticMap};
 use sornav_supervisor::{
     ActiveMissionKind as SupKind, Candidate, CandidateObject, ClusterCandidate, CommonsensePolicy,
@@ -22,6 +22,7 @@ use sornav_target_gate::{CandidateReport, GateCommand, NeverVisible, ObjectId, T
 use sornav_tsp::HorizonPlan;
 
 use crate::approach::{ApproachTarget, ViewDemand, approach_waypoint};
+use crate::back_off::BackOff;
 use crate::commitment;
 use crate::config::{AgentConfig, PolicyConfig};
 use crate::drop_edges::{DROP_LOOK_RADIUS_M, DropEdges};
@@ -183,6 +184,19 @@ struct LookMove {
 /// is declared exhausted (see `Agent::unreached_look`).
 const UNREACHED_LOOK_LIMIT: u32 = 3;
 
+/// A look again at an object of the target's category (see
+/// `Agent::recheck_look`): the object, its centre (to face) and the path to
+/// its view point.
+struct Recheck {
+    object: u64,
+    centre: Point3<f64>,
+    path: Vec<Point3<f64>>,
+}
+
+/// Most objects of the target's category looked at again per target
+/// before the floor is declared exhausted (see `Agent::recheck_look`).
+const RECHECK_LIMIT: usize = 3;
+
 /// Radius (m) around an unreached frontier's viewpoint within which a
 /// traversable place to look at it from is sought; a frontier within this
 /// distance of one already looked at is not looked at again.
@@ -231,6 +245,10 @@ const DROP_LOOK_STANDOFF_M: f64 = 0.4;
 
 /// Arrival radius (m) of a look's retreat mission.
 const DROP_LOOK_ARRIVAL_M: f64 = 0.3;
+
+/// Arrival radius (m) of a back-off (see [`BackOff`]): near the end of the
+/// way back, not anywhere within a relocation's radius of it.
+const BACK_OFF_ARRIVAL_M: f64 = 0.2;
 
 /// How far (m) under a drop edge the robot is told to look: deep enough
 /// that a platform with a tiltable camera looks down at it.
@@ -281,6 +299,8 @@ pub struct Agent {
     visits: Visits,
     /// The last pose at which a frontier was reachable.
     last_placed: Option<Point3<f64>>,
+    /// Recent positions and stuck places (see [`BackOff`]).
+    back_off: BackOff,
     /// The excluded stair ends were retried once (see `retry_stairs`).
     stairs_retried: bool,
     /// The robot's positions since it last stood on a known floor (the
@@ -294,6 +314,10 @@ pub struct Agent {
     looked_at: Vec<Point3<f64>>,
     /// Attempts of the exhaustion check so far (see `unreached_look`).
     unreached_looks: u32,
+    /// Objects of the target's category the exhaustion check went back to
+    /// look at (see `recheck_look`), and whether any is left.
+    rechecked: Vec<u64>,
+    recheck_done: bool,
     /// Where the robot saw through its floor (see [`DropEdges`]).
     drop_edges: DropEdges,
     /// Looks down into drop edges before exhaustion so far (see
@@ -594,6 +618,7 @@ impl Agent {
             arrivals: BTreeMap::new(),
             visits: Visits::new(REVISIT_LIMIT, REVISIT_RADIUS_M),
             last_placed: None,
+            back_off: BackOff::default(),
             stairs_retried: false,
             viewer: None,
             stop_moves: 0,
@@ -601,6 +626,8 @@ impl Agent {
             looking_around: 0,
             looked_at: Vec::new(),
             unreached_looks: 0,
+            rechecked: Vec::new(),
+            recheck_done: false,
             drop_edges: DropEdges::default(),
             drop_looks: 0,
             near_looks: 0,
@@ -744,6 +771,9 @@ impl Agent {
         self.route = None;
         self.relocation = None;
         self.stairs_retried = false;
+        self.back_off.reset_target();
+        self.rechecked.clear();
+        self.recheck_done = false;
         self.stop_moves = 0;
         self.drop_looks = 0;
         self.near_looks = 0;
@@ -779,12 +809,22 @@ impl Agent {
         let (mut points, occupancy_rejected) =
             observation.occupancy_points(&self.config.depth, self.config.occupancy_max_columns);
         let sensor_points = points.len() as u64;
-        footprint_points(
-            &observation.pose,
-            self.config.footprint_free_radius_m,
-            self.config.frontier.grid.resolution,
-            &mut points,
+        // The footprint is a floor at the robot's height: on a stair's
+        // tread (even within a robot's tolerance of a level) it would lay
+        // one flat surface over several treads and the floor beside them,
+        // and the stair would no longer be extracted.
+        let on_floor = !matches!(
+            self.frontiers.locate(&observation.pose.position),
+            Some(Location::Stair(_))
         );
+        if on_floor {
+            footprint_points(
+                &observation.pose,
+                self.config.footprint_free_radius_m,
+                self.config.frontier.grid.resolution,
+                &mut points,
+            );
+        }
         let voids = if self.config.voids_from_missing_depth {
             observation.void_points(
                 &self.config.depth,
@@ -942,7 +982,18 @@ impl Agent {
     }
 
     fn handle_outcome(&mut self, outcome: MissionOutcome) {
-        let failed = matches!(outcome.status, MissionStatus::Failed(_));
+        // Stuck where it was dispatched from: the place is at fault, not
+        // the goal; back off instead of excluding the goal.
+        let backing_off = matches!(
+            outcome.status,
+            MissionStatus::Failed(FailureReason::Stuck { .. })
+        ) && matches!(
+            outcome.kind,
+            MissionKind::Explore { .. } | MissionKind::Relocate { .. }
+        ) && self
+            .pose
+            .is_some_and(|p| self.back_off.on_stuck(outcome.id, &p.position));
+        let failed = matches!(outcome.status, MissionStatus::Failed(_)) && !backing_off;
         let reached = outcome.status == MissionStatus::Reached;
         match outcome.kind {
             MissionKind::NavToObject { object } => {
@@ -1178,6 +1229,9 @@ impl Agent {
         Ok(match submission {
             Submission::Started(id) | Submission::Updated(id) => {
                 self.stats.dispatched += 1;
+                if let Some(pose) = self.pose {
+                    self.back_off.started(id, pose.position);
+                }
                 AgentCommand::Dispatch { id, mission }
             }
             Submission::Refused { .. } => AgentCommand::Continue {
@@ -1255,6 +1309,7 @@ impl Agent {
         self.last_step = Some(now);
         self.stats.steps += 1;
         self.executor.clock_mut().0 = now;
+        self.back_off.record(pose.position);
         if self.current_level().is_some() {
             self.trail.clear();
             self.trail.push(pose.position);
@@ -1607,12 +1662,22 @@ impl Agent {
                 let looking = self
                     .drop_look
                     .is_some_and(|l| l.mission.is_some() && l.mission == active.map(|(id, _)| id));
-                let near_look = if looking || self.current_level().is_none() {
+                let back_off = if active.is_none() && self.back_off.is_pending() {
+                    self.back_off.take(&pose.position)
+                } else {
+                    None
+                };
+                let near_look = if looking || back_off.is_some() || self.current_level().is_none() {
                     None
                 } else {
                     self.drop_look(now, pose, Some(DROP_NEAR_M))?
                 };
                 match (explore, near_look) {
+                    _ if back_off.is_some() => {
+                        let path = back_off.unwrap_or_default();
+                        self.stats.back_offs += 1;
+                        self.back_off_along(now, step, path, &reason)?
+                    }
                     _ if looking => self.keep_going(
                         now,
                         step,
@@ -1708,6 +1773,28 @@ impl Agent {
                             ),
                         }
                     }
+                    (None, None) if active.is_none() && !self.recheck_done => {
+                        match self.recheck_look(pose)? {
+                            Some(Recheck {
+                                object,
+                                centre,
+                                path,
+                            }) => self.retreat(
+                                now,
+                                step,
+                                path,
+                                Some(centre),
+                                format!(
+                                    "no reachable frontier: back to look at object {object} of the target's category, not confirmed ({reason})"
+                                ),
+                            )?,
+                            None => self.keep_going(
+                                now,
+                                step,
+                                format!("no reachable frontier and no unconfirmed object of the target's category to look at again ({reason})"),
+                            ),
+                        }
+                    }
                     (None, None) if active.is_none() => {
                         self.decide(
                             now,
@@ -1791,6 +1878,84 @@ impl Agent {
         Ok(self
             .path_to_place_near(level, &feet, &at, UNREACHED_LOOK_RADIUS_M)?
             .map(|path| LookMove { path, at }))
+    }
+
+    /// The exhaustion check's last look: an object of the target's
+    /// category on the map that the gate has not confirmed (a verification
+    /// that saw nothing from a poor approach point, evidence that lapsed
+    /// while the robot looked elsewhere) is looked at again, from the best
+    /// reachable view point ([`ViewDemand::Prefer`]: a clear one first),
+    /// before the floor is declared exhausted. The nearest
+    /// such object with a reachable clear view point, each once, at most
+    /// [`RECHECK_LIMIT`] per target; the gate then judges it from the new
+    /// frames. `Ok(None)` (and no more rechecks) when none is left.
+    ///
+    /// # Complexity
+    /// O(c) over the c object clusters, plus one view-point search
+    /// (see [`approach_waypoint`]) per object tried.
+    fn recheck_look(&mut self, pose: &RobotPose) -> Result<Option<Recheck>, AgentError> {
+        let Some(state) = self.target.as_ref() else {
+            self.recheck_done = true;
+            return Ok(None);
+        };
+        if self.rechecked.len() >= RECHECK_LIMIT || state.gate.is_confirmed() {
+            self.recheck_done = true;
+            return Ok(None);
+        }
+        let feet = pose.position;
+        let mut objects: Vec<(f64, u64, Point3<f64>, f64)> = self
+            .semantic
+            .clusters()
+            .filter(|c| {
+                self.categories
+                    .get(&c.label)
+                    .and_then(Option::as_ref)
+                    .is_some_and(|cat| *cat == state.target.category)
+            })
+            .filter(|c| !self.rechecked.contains(&c.id.0))
+            .map(|c| ((c.centre - feet).norm(), c.id.0, c.centre, c.bounds.min.z))
+            .collect();
+        objects.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        let viewer = self.viewer();
+        let arrival = self
+            .config
+            .approach
+            .view_arrival_m
+            .min(self.config.executor.nav_to_object.arrival.radius_m);
+        for (_, id, centre, bottom) in objects {
+            self.rechecked.push(id);
+            let Some(level) = self.frontiers.level_containing(bottom) else {
+                continue;
+            };
+            let Some(view) = self.object_view(id, centre) else {
+                continue;
+            };
+            let target = ApproachTarget {
+                object: &view,
+                voxels: &self.semantic,
+                viewer,
+                arrival_radius_m: arrival,
+                demand: ViewDemand::Prefer,
+            };
+            if let Some((_, path)) = approach_waypoint(
+                &mut self.frontiers,
+                feet,
+                level,
+                &target,
+                &self.config.approach,
+            )? {
+                return Ok(Some(Recheck {
+                    object: id,
+                    centre,
+                    path,
+                }));
+            }
+            if self.rechecked.len() >= RECHECK_LIMIT {
+                break;
+            }
+        }
+        self.recheck_done = true;
+        Ok(None)
     }
 
     /// The path from `feet` to the reachable traversable place of `level`
@@ -2059,6 +2224,36 @@ impl Agent {
                 .with_arrival_radius(DROP_LOOK_ARRIVAL_M);
         }
         self.dispatch_as(now, step, mission, path, DecisionAction::Retreat, reason)
+    }
+
+    /// A mission failed stuck where it started: drives `path` (the way the
+    /// robot came, see [`BackOff`]) and plans again from its end, keeping
+    /// the failed mission's goal.
+    fn back_off_along(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        path: Vec<Point3<f64>>,
+        reason: &str,
+    ) -> Result<AgentCommand, AgentError> {
+        let Some(&back) = path.last() else {
+            return Ok(self.keep_going(now, step, reason.to_owned()));
+        };
+        let mission = Mission::new(
+            MissionKind::Relocate {
+                cluster: ExecClusterId(u64::MAX),
+            },
+            back,
+        )
+        .with_arrival_radius(BACK_OFF_ARRIVAL_M);
+        self.dispatch_as(
+            now,
+            step,
+            mission,
+            path,
+            DecisionAction::Retreat,
+            format!("stuck where the last mission started: backing off along the way the robot came ({reason})"),
+        )
     }
 
     /// Off a known floor, nothing reachable, looked around: walks back

@@ -150,6 +150,7 @@ macro_rules! snake_case_names {
 
 mod agent;
 mod approach;
+mod back_off;
 mod commitment;
 mod config;
 mod drop_edges;

@@ -245,6 +245,10 @@ pub struct AgentStats {
     /// point reachable, or the allowed moves used up).
     #[serde(default)]
     pub glimpse_stops: u64,
+    /// Back-offs along the way the robot came, after a mission failed
+    /// stuck where it started (the goal kept instead of excluded).
+    #[serde(default)]
+    pub back_offs: u64,
 }
 
 /// Everything needed to draw the agent's state (serde).

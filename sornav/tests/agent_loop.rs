@@ -340,3 +340,129 @@ fn unreached_frontiers_are_looked_at_before_the_floor_is_exhausted() {
         agent.pose()
     );
 }
+
+/// A mission that fails stuck where it started does not exclude its
+/// frontier: the robot backs off along the way it came (once per place)
+/// and plans again from there.
+#[test]
+fn stuck_at_the_start_of_a_mission_backs_off_along_the_way_in() {
+    use sornav::executor::{FailureReason, MissionStatus};
+    use std::time::Duration;
+    let world = two_rooms();
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("find the television").unwrap();
+    let mut robot = Robot::new(3.5, 1.5);
+    let start = robot.pose.position;
+    let mut now = Duration::ZERO;
+    let mut trail = vec![start];
+    // Drive until the robot is over a metre from its start and has just
+    // been given a new mission.
+    let mut stuck_id = None;
+    for _ in 0..200 {
+        agent.observe(&world.observation(robot.pose)).unwrap();
+        let command = agent.step(now).unwrap();
+        now += Duration::from_millis(500);
+        let fresh = matches!(&command, AgentCommand::Dispatch { mission, .. } if mission.kind.name() == "explore");
+        assert!(robot.obey(&command), "episode ended early: {command:?}");
+        if fresh && (robot.pose.position - start).norm() > 1.2 {
+            stuck_id = agent.active_mission().map(|(id, _)| id);
+            break;
+        }
+        robot.act();
+        trail.push(robot.pose.position);
+    }
+    let id = stuck_id.expect("an exploration mission over a metre from the start");
+    let excluded = agent.stats().excluded_frontiers;
+    agent
+        .on_mission_outcome(
+            id,
+            MissionStatus::Failed(FailureReason::Stuck { progress_m: 0.0 }),
+        )
+        .unwrap();
+    agent.observe(&world.observation(robot.pose)).unwrap();
+    let command = agent.step(now).unwrap();
+    let AgentCommand::Dispatch { mission, .. } = command else {
+        panic!("expected the back-off: {command:?}");
+    };
+    assert_eq!(mission.kind.name(), "relocate");
+    assert!(
+        agent
+            .last_decision()
+            .unwrap()
+            .reason
+            .contains("backing off"),
+        "{}",
+        agent.last_decision().unwrap().reason
+    );
+    let here = robot.pose.position;
+    let path = mission.path.clone().expect("the way back");
+    assert_eq!(path[0], here);
+    assert!((mission.waypoint - here).norm() >= 0.3);
+    // Every point of the way back is a place the robot drove through.
+    for p in &path[1..] {
+        assert!(
+            trail.iter().any(|t| (t - p).norm() < 0.11),
+            "{p} is off the way in"
+        );
+    }
+    assert_eq!(agent.stats().excluded_frontiers, excluded, "goal kept");
+    assert_eq!(agent.stats().back_offs, 1);
+}
+
+/// Before the floor is declared exhausted, an object of the target's
+/// category that the gate never confirmed is looked at again from a view
+/// point of it (here the gate can never confirm anything).
+#[test]
+fn exhaustion_looks_again_at_an_unconfirmed_object_of_the_target() {
+    let world = World {
+        blocks: vec![
+            wall(-0.1, -0.1, 6.1, 0.1),
+            wall(-0.1, 3.9, 6.1, 4.1),
+            wall(-0.1, -0.1, 0.1, 4.1),
+            wall(5.9, -0.1, 6.1, 4.1),
+            object(TV, 4.6, 3.7, 5.2, 3.89, 0.5, 1.1),
+        ],
+    };
+    let mut config = AgentConfig::default();
+    config.gate.n_obs = 1_000_000;
+    let mut agent = Agent::new(config).unwrap();
+    agent.set_target("find the television").unwrap();
+    let mut robot = Robot::new(1.0, 1.0);
+    let episode = run(&mut agent, &world, &mut robot, 400);
+    assert!(episode.stop.is_none());
+    assert!(
+        matches!(episode.commands.last(), Some(AgentCommand::Exhausted)),
+        "{:?}",
+        episode.commands.last()
+    );
+    let look = episode
+        .commands
+        .iter()
+        .find_map(|c| match c {
+            AgentCommand::Dispatch { mission, .. }
+                if agent.decisions().iter().any(|d| {
+                    d.mission == Some(mission_id(c)) && d.reason.contains("back to look at object")
+                }) =>
+            {
+                Some(mission.clone())
+            }
+            _ => None,
+        })
+        .expect("a look at the TV before exhaustion");
+    let at = look.look_at.expect("faces the object");
+    assert!((at.x - 4.9).abs() < 0.5 && (at.y - 3.8).abs() < 0.5, "{at}");
+    // Once per object: one look, then exhaustion.
+    let looks = agent
+        .decisions()
+        .iter()
+        .filter(|d| d.reason.contains("back to look at object"))
+        .count();
+    assert_eq!(looks, 1);
+}
+
+fn mission_id(c: &AgentCommand) -> sornav::executor::MissionId {
+    match c {
+        AgentCommand::Dispatch { id, .. } => *id,
+        _ => unreachable!("dispatches only"),
+    }
+}

@@ -230,6 +230,79 @@ fn invalid_points_inside_a_valid_frame_are_counted() {
     assert_eq!(agent.stats().rejected_points, 4);
 }
 
+/// Surface returns of a straight stair along +x (treads of `tread` m,
+/// risers of `rise` m, 1 m wide, from x = 1.5) and the floor before it,
+/// on a 5 cm lattice, as seen from above.
+fn stair_points(rise: f64, tread: f64, steps: usize) -> Vec<Point3<f64>> {
+    let mut points = Vec::new();
+    let lattice = |a: f64, b: f64| {
+        (0..)
+            .map(move |k| a + 0.05 * f64::from(k))
+            .take_while(move |v| *v < b)
+    };
+    for x in lattice(-1.0, 1.5) {
+        for y in lattice(-1.0, 1.0) {
+            points.push(Point3::new(x, y, 0.0));
+        }
+    }
+    for k in 0..steps {
+        let x0 = 1.5 + tread * k as f64;
+        let z = rise * (k + 1) as f64;
+        for x in lattice(x0, x0 + tread) {
+            for y in lattice(-0.5, 0.5) {
+                points.push(Point3::new(x, y, z));
+            }
+        }
+    }
+    points
+}
+
+#[test]
+fn no_footprint_on_a_stair() {
+    // Standing on a stair's first tread (0.17 m up: still on level 0 for
+    // the robot's tolerance) the footprint would lay a flat floor at
+    // 0.17 m over the treads around it and the floor beside them; it is
+    // left out there, and kept on the floor.
+    let (rise, tread) = (0.17, 0.28);
+    let frame = |feet: Point3<f64>| Observation {
+        pose: RobotPose::new(feet, 0.0),
+        sensor: Sensor::Occupancy(OccupancyObservation {
+            origin: feet + nalgebra::Vector3::new(0.0, 0.0, 0.88),
+            points: stair_points(rise, tread, 8),
+        }),
+    };
+    let mut agent = agent();
+    let floor = Point3::new(0.5, 0.0, 0.0);
+    let mut t = 0.0;
+    for _ in 0..3 {
+        assert!(agent.observe(&frame(floor)).unwrap().footprint_points > 0);
+        agent.step(Duration::from_secs_f64(t)).unwrap();
+        t += 0.5;
+    }
+    assert_eq!(
+        agent.frontier_map().stairs().len(),
+        1,
+        "the stair is mapped"
+    );
+    let first_tread = Point3::new(1.5 + tread / 2.0, 0.0, rise);
+    assert_eq!(
+        agent.current_level(),
+        Some(sornav::frontier_graph::LevelId(0))
+    );
+    for _ in 0..3 {
+        let report = agent.observe(&frame(first_tread)).unwrap();
+        assert_eq!(report.footprint_points, 0);
+        agent.step(Duration::from_secs_f64(t)).unwrap();
+        t += 0.5;
+    }
+    assert_eq!(
+        agent.frontier_map().stairs().len(),
+        1,
+        "still mapped from its first tread"
+    );
+    assert!(agent.observe(&frame(floor)).unwrap().footprint_points > 0);
+}
+
 #[test]
 fn protocol_errors_are_typed() {
     let mut agent = Agent::new(AgentConfig::default()).unwrap();
