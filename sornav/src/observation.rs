@@ -268,7 +268,13 @@ impl Observation {
     /// * its crossings span at least [`MIN_VOID_RUN_M`] along the view: a
     ///   narrower gap in the floor (under a door's threshold, between two
     ///   rooms' floors of a modelled home, a seam of a scanned mesh) is no
-    ///   drop-off for a robot.
+    ///   drop-off for a robot;
+    /// * the return that closes the run above (if any) is not nearer than
+    ///   the run's first crossing: a surface nearer than where the floor
+    ///   would have been hid it (the edge of a table top the camera looks
+    ///   past, nearer than `min_depth` so that it returns nothing); beyond
+    ///   a real edge the next return (the far side of a stairwell) lies
+    ///   further.
     ///
     /// The crossings of the run's pixels are the voids. A floor the camera
     /// does not return at all (a missing model, a camera that does not
@@ -300,14 +306,21 @@ impl Observation {
             // From the bottom row up: nearer floor first.
             let mut edge = false;
             run.clear();
+            // The z-depth of the run's first (nearest) floor crossing.
+            let mut run_near = f64::INFINITY;
             for v in (0..h).step_by(stride).rev() {
                 let z = d.depth[v * w + u];
                 let (x, y) = (u as f64, v as f64);
                 if z.is_finite() && z > 0.0 {
-                    if edge && void_run_is_deep(&run) {
+                    // A return above the run nearer than where the floor
+                    // would have been: something between the camera and
+                    // the floor (a table top nearer than `min_depth`
+                    // returns nothing) hid it, no floor ended.
+                    if edge && void_run_is_deep(&run) && f64::from(z) >= run_near {
                         out.append(&mut run);
                     }
                     run.clear();
+                    run_near = f64::INFINITY;
                     let p = d.camera_pose * d.camera.back_project(x, y, f64::from(z));
                     edge = (p.z - floor_z).abs() <= FLOOR_EDGE_TOLERANCE_M;
                     continue;
@@ -321,6 +334,7 @@ impl Observation {
                 let t = (floor_z - origin.z) / ray.z;
                 if ray.z < 0.0 && t >= options.min_depth && t <= far {
                     let p = origin + t * ray;
+                    run_near = run_near.min(t);
                     run.push(Point2::new(p.x, p.y));
                 } else {
                     // Out of the window: the run cannot be told from a gap.
@@ -328,6 +342,7 @@ impl Observation {
                         out.append(&mut run);
                     }
                     run.clear();
+                    run_near = f64::INFINITY;
                     edge = false;
                 }
             }
@@ -388,7 +403,8 @@ mod tests {
     /// A camera at 0.88 m, tilted down, over a floor that ends 2 m ahead
     /// with nothing beyond (depth 0 there), one dropped return inside the
     /// floor: the voids lie past the edge, within 90 % of the depth window,
-    /// and the dropped return gives none.
+    /// and the dropped return gives none; a table top whose near edge is
+    /// nearer than `min_depth` gives none either.
     #[test]
     fn voids_lie_past_a_floor_edge_over_nothing() {
         let camera = PinholeCamera {
@@ -451,6 +467,40 @@ mod tests {
         assert!(gap.void_points(&options, 0, 0.0).is_empty());
         let unseen = observe(frame(&|_| false));
         assert!(unseen.void_points(&options, 0, 0.0).is_empty());
+        // A table top (0.74 m high, from 0.4 m to 2.4 m ahead) over a
+        // floor that goes on: rays past its near edge hit it nearer than
+        // `min_depth` and return nothing, but the top returns above them:
+        // no void.
+        let mut table = vec![0.0f32; 64 * 48];
+        let mut hidden = 0;
+        for v in 0..48 {
+            for u in 0..64 {
+                let ray =
+                    pose.rotation * camera.back_project(f64::from(u), f64::from(v), 1.0).coords;
+                if ray.z >= 0.0 {
+                    continue;
+                }
+                let top = -0.14 / ray.z;
+                let t = if (0.4..2.4).contains(&(ray.x * top)) {
+                    top
+                } else {
+                    -0.88 / ray.z
+                };
+                if t < 0.5 {
+                    hidden += 1;
+                } else if t <= 5.0 {
+                    #[allow(clippy::cast_possible_truncation)]
+                    {
+                        table[v as usize * 64 + u as usize] = t as f32;
+                    }
+                }
+            }
+        }
+        assert!(
+            hidden > 50,
+            "the table's edge hides part of the floor: {hidden}"
+        );
+        assert!(observe(table).void_points(&options, 0, 0.0).is_empty());
         // A cloud has no voids.
         let cloud = Observation {
             pose: RobotPose::new(Point3::new(0.0, 0.0, 0.0), 0.0),
