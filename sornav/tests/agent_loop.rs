@@ -31,11 +31,29 @@ fn two_rooms() -> World {
     }
 }
 
+/// A closed 6 m x 4 m room with `inside`.
+fn closed_room(inside: Vec<common::Block>) -> World {
+    let mut blocks = vec![
+        wall(-0.1, -0.1, 6.1, 0.1),
+        wall(-0.1, 3.9, 6.1, 4.1),
+        wall(-0.1, -0.1, 0.1, 4.1),
+        wall(5.9, -0.1, 6.1, 4.1),
+    ];
+    blocks.extend(inside);
+    World { blocks }
+}
+
+/// An agent with `config` searching for the television.
+fn tv_agent(config: AgentConfig) -> Agent {
+    let mut agent = Agent::new(config).unwrap();
+    agent.set_target("find the television").unwrap();
+    agent
+}
+
 #[test]
 fn explores_through_the_door_and_confirms_the_target() {
     let world = two_rooms();
-    let mut agent = Agent::new(AgentConfig::default()).unwrap();
-    agent.set_target("find the television").unwrap();
+    let mut agent = tv_agent(AgentConfig::default());
     let mut robot = Robot::new(3.5, 1.5);
     let episode = run(&mut agent, &world, &mut robot, 400);
 
@@ -217,16 +235,8 @@ fn off_a_known_floor_with_nothing_reachable_the_search_ends() {
     use nalgebra::Point3;
     use sornav::executor::RobotPose;
     // A closed 6 m x 4 m room: nothing to explore once it is seen.
-    let world = World {
-        blocks: vec![
-            wall(-0.1, -0.1, 6.1, 0.1),
-            wall(-0.1, 3.9, 6.1, 4.1),
-            wall(-0.1, -0.1, 0.1, 4.1),
-            wall(5.9, -0.1, 6.1, 4.1),
-        ],
-    };
-    let mut agent = Agent::new(AgentConfig::default()).unwrap();
-    agent.set_target("find the television").unwrap();
+    let world = closed_room(Vec::new());
+    let mut agent = tv_agent(AgentConfig::default());
     // Seen from its floor, then 1.5 m above it (no known floor there).
     agent
         .observe(&world.observation(RobotPose::new(Point3::new(3.0, 2.0, 0.0), 0.0)))
@@ -312,8 +322,7 @@ fn unreached_frontiers_are_looked_at_before_the_floor_is_exhausted() {
             wall(5.9, 2.15, 6.1, 4.1),
         ],
     };
-    let mut agent = Agent::new(AgentConfig::default()).unwrap();
-    agent.set_target("find the television").unwrap();
+    let mut agent = tv_agent(AgentConfig::default());
     let mut robot = Robot::new(1.5, 2.0);
     let episode = run(&mut agent, &world, &mut robot, 400);
     assert!(
@@ -349,8 +358,7 @@ fn stuck_at_the_start_of_a_mission_backs_off_along_the_way_in() {
     use sornav::executor::{FailureReason, MissionStatus};
     use std::time::Duration;
     let world = two_rooms();
-    let mut agent = Agent::new(AgentConfig::default()).unwrap();
-    agent.set_target("find the television").unwrap();
+    let mut agent = tv_agent(AgentConfig::default());
     let mut robot = Robot::new(3.5, 1.5);
     let start = robot.pose.position;
     let mut now = Duration::ZERO;
@@ -414,19 +422,10 @@ fn stuck_at_the_start_of_a_mission_backs_off_along_the_way_in() {
 /// point of it (here the gate can never confirm anything).
 #[test]
 fn exhaustion_looks_again_at_an_unconfirmed_object_of_the_target() {
-    let world = World {
-        blocks: vec![
-            wall(-0.1, -0.1, 6.1, 0.1),
-            wall(-0.1, 3.9, 6.1, 4.1),
-            wall(-0.1, -0.1, 0.1, 4.1),
-            wall(5.9, -0.1, 6.1, 4.1),
-            object(TV, 4.6, 3.7, 5.2, 3.89, 0.5, 1.1),
-        ],
-    };
+    let world = closed_room(vec![object(TV, 4.6, 3.7, 5.2, 3.89, 0.5, 1.1)]);
     let mut config = AgentConfig::default();
     config.gate.n_obs = 1_000_000;
-    let mut agent = Agent::new(config).unwrap();
-    agent.set_target("find the television").unwrap();
+    let mut agent = tv_agent(config);
     let mut robot = Robot::new(1.0, 1.0);
     let episode = run(&mut agent, &world, &mut robot, 400);
     assert!(episode.stop.is_none());
