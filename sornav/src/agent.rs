@@ -141,6 +141,13 @@ struct TargetState {
 /// reached frontier.
 const STAIR_END_ARRIVALS: u32 = 3;
 
+/// Exploration missions toward one frontier that ended neither reached
+/// nor failed (short of a stair end, or pre-empted for another goal) after
+/// which the frontier is excluded: normally the map changes and the
+/// frontier gets a new id (a stair grows, a frontier shrinks); one the
+/// robot keeps stopping short of or switching away from is thrash.
+const UNFINISHED_MISSIONS_LIMIT: u32 = 16;
+
 /// A robot off a known floor with nothing reachable retreats to the last
 /// pose with a reachable frontier when it is farther than this (m).
 const RETREAT_MIN_M: f64 = 0.3;
@@ -295,6 +302,9 @@ pub struct Agent {
     excluded: BTreeSet<FrontierId>,
     /// Arrivals at each frontier and the time of the first.
     arrivals: BTreeMap<FrontierId, (u32, Duration)>,
+    /// Exploration missions that ended short of their frontier or
+    /// pre-empted, by frontier (see [`UNFINISHED_MISSIONS_LIMIT`]).
+    unfinished: BTreeMap<FrontierId, u32>,
     /// Places where exploration missions arrived (see [`REVISIT_LIMIT`]).
     visits: Visits,
     /// The last pose at which a frontier was reachable.
@@ -616,6 +626,7 @@ impl Agent {
             clusters: None,
             excluded: BTreeSet::new(),
             arrivals: BTreeMap::new(),
+            unfinished: BTreeMap::new(),
             visits: Visits::new(REVISIT_LIMIT, REVISIT_RADIUS_M),
             last_placed: None,
             back_off: BackOff::default(),
@@ -810,14 +821,17 @@ impl Agent {
             observation.occupancy_points(&self.config.depth, self.config.occupancy_max_columns);
         let sensor_points = points.len() as u64;
         // The footprint is a floor at the robot's height: on a stair's
-        // tread (even within a robot's tolerance of a level) it would lay
-        // one flat surface over several treads and the floor beside them,
-        // and the stair would no longer be extracted.
-        let on_floor = !matches!(
+        // tread (even within a robot's tolerance of a level) a disk would
+        // lay one flat surface over several treads and the floor beside
+        // them, and the stair would no longer be extracted; there only the
+        // point under the robot's feet is floor.
+        let on_stair = matches!(
             self.frontiers.locate(&observation.pose.position),
             Some(Location::Stair(_))
         );
-        if on_floor {
+        if on_stair {
+            points.push(observation.pose.position);
+        } else {
             footprint_points(
                 &observation.pose,
                 self.config.footprint_free_radius_m,
@@ -1044,6 +1058,16 @@ impl Agent {
                     if *n >= needed && outcome.at.saturating_sub(*first) >= look {
                         self.exclude(id);
                     }
+                } else {
+                    // Short of a stair end, or given up for another goal,
+                    // again and again (an end the robot cannot stand at; two
+                    // goals it switches between): bounded like any
+                    // re-dispatch.
+                    let n = self.unfinished.entry(id).or_insert(0);
+                    *n += 1;
+                    if *n >= UNFINISHED_MISSIONS_LIMIT {
+                        self.exclude(id);
+                    }
                 }
             }
             MissionKind::Relocate { .. } => {
@@ -1099,6 +1123,7 @@ impl Agent {
         for id in stairs {
             if self.excluded.remove(&id) {
                 self.arrivals.remove(&id);
+                self.unfinished.remove(&id);
                 any = true;
             }
         }

@@ -294,8 +294,9 @@ pub struct AgentConfig {
     /// Radius (m) of the disk around the robot's pose that every
     /// observation marks as free floor: the robot stands there, and a
     /// camera does not see the floor next to its base (default 0.18, the
-    /// robot radius; 0 disables). Not while the map locates the robot on
-    /// a stair: a flat disk would cover the treads around it.
+    /// robot radius; 0 disables). While the map locates the robot on a
+    /// stair only the point under its feet is marked: a flat disk would
+    /// cover the treads around it.
     pub footprint_free_radius_m: f64,
     /// Depth frames are subsampled for the occupancy grid to at most this
     /// many columns (same stride in rows; default 160, 0 = every pixel).
