@@ -429,6 +429,17 @@ fn explore_mission(graph: &FrontierGraph, id: FrontierId) -> Option<Mission> {
     })
 }
 
+/// A mission to `back` that is no relocation of Algorithm 1 (a retreat, a
+/// look, a back-off): a relocation to no cluster.
+fn retreat_mission(back: Point3<f64>) -> Mission {
+    Mission::new(
+        MissionKind::Relocate {
+            cluster: ExecClusterId(u64::MAX),
+        },
+        back,
+    )
+}
+
 /// Floor returns on a `resolution` lattice covering the disk of `radius`
 /// around the robot: the floor the robot stands on is free (the occupancy
 /// grid marks floor returns free and carves the rays to them).
@@ -1942,11 +1953,7 @@ impl Agent {
             .collect();
         objects.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
         let viewer = self.viewer();
-        let arrival = self
-            .config
-            .approach
-            .view_arrival_m
-            .min(self.config.executor.nav_to_object.arrival.radius_m);
+        let arrival = self.view_arrival_m();
         for (_, id, centre, bottom) in objects {
             self.rechecked.push(id);
             let Some(level) = self.frontiers.level_containing(bottom) else {
@@ -2235,12 +2242,7 @@ impl Agent {
         let Some(&back) = path.last() else {
             return Ok(self.keep_going(now, step, reason));
         };
-        let mut mission = Mission::new(
-            MissionKind::Relocate {
-                cluster: ExecClusterId(u64::MAX),
-            },
-            back,
-        );
+        let mut mission = retreat_mission(back);
         if let Some(look) = look_at {
             // A look needs the robot at its place, not anywhere within a
             // relocation's arrival radius.
@@ -2264,13 +2266,7 @@ impl Agent {
         let Some(&back) = path.last() else {
             return Ok(self.keep_going(now, step, reason.to_owned()));
         };
-        let mission = Mission::new(
-            MissionKind::Relocate {
-                cluster: ExecClusterId(u64::MAX),
-            },
-            back,
-        )
-        .with_arrival_radius(BACK_OFF_ARRIVAL_M);
+        let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
         self.dispatch_as(
             now,
             step,
@@ -2317,6 +2313,15 @@ impl Agent {
                 Ok(AgentCommand::Exhausted)
             }
         }
+    }
+
+    /// Arrival radius (m) of a move to a view point: the smaller of
+    /// `approach.view_arrival_m` and the `NAV_TO_OBJECT` rule's.
+    fn view_arrival_m(&self) -> f64 {
+        self.config
+            .approach
+            .view_arrival_m
+            .min(self.config.executor.nav_to_object.arrival.radius_m)
     }
 
     /// The view of object `id` (a semantic-map cluster); the voxel at
@@ -2379,11 +2384,7 @@ impl Agent {
             .frontiers
             .level_map(level)
             .is_some_and(|m| pose.position.z - m.config().grid.floor_z <= FLOOR_TOLERANCE_M);
-        let arrival = self
-            .config
-            .approach
-            .view_arrival_m
-            .min(self.config.executor.nav_to_object.arrival.radius_m);
+        let arrival = self.view_arrival_m();
         let here = if on_floor {
             let rule = self.config.approach.view_rule();
             view.sight(&self.semantic, &pose.position, &viewer, &rule)
