@@ -554,6 +554,59 @@ impl StairReference {
         seen.into_iter().collect()
     }
 
+    /// How far (height, in direction `dir`: +1 up, -1 down) the flight of
+    /// component `comp` reaches across unobserved columns (`stairs.rs`'s
+    /// `gap_sighting`, by brute force over every off-level node and without
+    /// its cap on sources, so never short of it): from a node of the
+    /// component within a step of its top (bottom) that borders a column
+    /// without surfaces, an off-level node at least two columns and at most
+    /// 2 m away, rising (descending) at most 1 m per metre plus a step, with
+    /// no surface in any column on the straight line between. The
+    /// component's own extreme when nothing qualifies.
+    fn gap_reach(&self, comp: &[usize], dir: f32) -> f32 {
+        let edge = comp
+            .iter()
+            .map(|&i| self.nodes[i].z * dir)
+            .fold(f32::NEG_INFINITY, f32::max)
+            * dir;
+        let empty = |c: (i32, i32)| !self.by_col.contains_key(&c);
+        let g = (2.0 / self.res).ceil() as i32;
+        let mut best = edge;
+        for &s in comp {
+            let RefNode { col: k, z, .. } = self.nodes[s];
+            if (edge - z) * dir > self.step
+                || !DIRS8.iter().any(|&(dx, dy)| empty((k.0 + dx, k.1 + dy)))
+            {
+                continue;
+            }
+            for (j, n) in self.nodes.iter().enumerate() {
+                let (ddx, ddy) = (n.col.0 - k.0, n.col.1 - k.1);
+                let cheb = ddx.abs().max(ddy.abs());
+                if j == s || n.level.is_some() || cheb < 2 || cheb > g {
+                    continue;
+                }
+                let d = self.res * f64::from(ddx * ddx + ddy * ddy).sqrt();
+                let rise = (n.z - z) * dir;
+                // a hair of slack: the reference may only reach farther
+                let max_rise = d as f32 + self.step + 1e-4;
+                if d > 2.0 + 1e-9 || rise <= 0.0 || rise > max_rise || (n.z - best) * dir <= 0.0 {
+                    continue;
+                }
+                let unseen_between = (1..cheb).all(|t| {
+                    let f = f64::from(t) / f64::from(cheb);
+                    empty((
+                        k.0 + (f64::from(ddx) * f).round() as i32,
+                        k.1 + (f64::from(ddy) * f).round() as i32,
+                    ))
+                });
+                if unseen_between {
+                    best = n.z;
+                }
+            }
+        }
+        best
+    }
+
     /// The surface height of `level` in column `col` (where a stair's end
     /// stands: the real surface, within the level tolerance of the floor).
     fn foot_z(&self, level: usize, col: (i32, i32)) -> Option<f64> {
@@ -740,8 +793,10 @@ proptest! {
     ///   level_tolerance)` more than the best choice of last foot);
     /// * a partly seen stair is exactly as long as the reference's shortest
     ///   path from its level end to its open end, which rises at least
-    ///   `min_stair_rise` and is the highest-rising node the reference
-    ///   reaches from that end.
+    ///   `min_stair_rise` (or only the level tolerance when the flight is
+    ///   sighted: its surfaces, or what they sight across unobserved
+    ///   columns, reach `min_stair_sighting_rise`) and is the
+    ///   highest-rising node the reference reaches from that end.
     #[test]
     fn stairs_match_brute_force_reference(scene in scene_strategy(), cut in 0.0f64..1.6) {
         let n = ((cut * scene.feet.len() as f64).ceil() as usize).clamp(1, scene.feet.len());
@@ -834,13 +889,19 @@ proptest! {
                     let hs = r.floors[sl];
                     let rise = |i: usize| (f64::from(r.nodes[i].z) - hs).abs();
                     // A sighted flight: the step-connected off-level
-                    // surfaces around it (walkable or not) reach
+                    // surfaces around it (walkable or not), or what they
+                    // sight across unobserved columns, reach
                     // `min_stair_sighting_rise` beyond the level; then any
                     // walkable tread off the level is an open end.
                     let dir = if far.position.z >= start.position.z { 1.0 } else { -1.0 };
-                    let reach = r.component(ids[0]).into_iter()
-                        .map(|i| (f64::from(r.nodes[i].z) - hs) * dir)
+                    let comp = r.component(ids[0]);
+                    let own = comp.iter()
+                        .map(|&i| (f64::from(r.nodes[i].z) - hs) * dir)
                         .fold(f64::NEG_INFINITY, f64::max);
+                    // ... or across unobserved columns (a flight seen
+                    // from its foot, the rest of it seen from elsewhere)
+                    let gap = (f64::from(r.gap_reach(&comp, dir as f32)) - hs) * dir;
+                    let reach = own.max(gap);
                     let min_rise = if reach >= cfg.levels.min_stair_sighting_rise {
                         f64::from(cfg.levels.level_tolerance as f32)
                     } else {
