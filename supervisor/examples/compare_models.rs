@@ -3,12 +3,17 @@
 //! logistic regression over object-presence features fitted on complete
 //! regions (Newton / IRLS with a dense Cholesky solve from faer), a latent
 //! room-type mixture (Bernoulli mixture by EM, observed labels only at
-//! inference) and the shipped observed-subset logistic model
-//! (`PriorModel::ObservedSubsetLogistic`) over a grid of `beta` and `lambda`.
+//! inference), the shipped observed-subset logistic model
+//! (`PriorModel::ObservedSubsetLogistic`) over a grid of `beta` and `lambda`,
+//! a k-NN over label sets (Jaccard similarity), rank averages of
+//! complementary models and a per-category choice by train-CV AUC.
 //!
 //! ```text
-//! cargo run --release -p sornav-supervisor --example compare_models -- ../shared/data/hm3d-sem-stats
+//! cargo run --release -p sornav-supervisor --example compare_models -- ../shared/data/hm3d-sem-stats [--only TEXT]
 //! ```
+//!
+//! `--only TEXT` runs only the models whose name contains `TEXT` (and the
+//! two shipped ones, the references of the rules and the ensembles).
 //!
 //! Selection uses 5-fold cross-validation over **train** scenes only; the val
 //! column is reported for information (it must not drive the choice). The
@@ -282,6 +287,108 @@ impl Scorer for Mixture {
     }
 }
 
+/// k nearest train regions by the Jaccard similarity of their label sets
+/// (the target's own label removed from both sides): `P(g | L) =
+/// (sum_i s_i y_i + p_g) / (sum_i s_i + 1)` over the `k` most similar
+/// regions, `p_g` the train base rate (one pseudo-region, so that an empty
+/// or unmatched view gives the base rate).
+struct Knn {
+    index: BTreeMap<String, usize>,
+    regions: Vec<(Vec<usize>, BTreeSet<String>)>,
+    k: usize,
+}
+
+impl Knn {
+    fn fit(train: &[&Hm3dRegion], k: usize) -> Self {
+        let mut counts: BTreeMap<String, u64> = BTreeMap::new();
+        for r in train {
+            for l in &r.labels {
+                *counts.entry(l.clone()).or_default() += 1;
+            }
+        }
+        let index: BTreeMap<String, usize> = counts
+            .into_iter()
+            .filter(|(_, n)| *n >= PriorBuildConfig::default().min_regions)
+            .enumerate()
+            .map(|(i, (l, _))| (l, i))
+            .collect();
+        let regions = train
+            .iter()
+            .map(|r| {
+                let known = r
+                    .labels
+                    .iter()
+                    .filter_map(|l| index.get(l).copied())
+                    .collect();
+                (known, r.labels.clone())
+            })
+            .collect();
+        Knn { index, regions, k }
+    }
+}
+
+/// |a ∩ b| / |a ∪ b| of two sorted index lists, `skip` left out of both.
+fn jaccard(a: &[usize], b: &[usize], skip: Option<usize>) -> f64 {
+    let (mut i, mut j, mut both, mut union) = (0, 0, 0usize, 0usize);
+    while i < a.len() || j < b.len() {
+        let (x, y) = (a.get(i).copied(), b.get(j).copied());
+        let next = match (x, y) {
+            (Some(x), Some(y)) if x == y => {
+                i += 1;
+                j += 1;
+                (x, true)
+            }
+            (Some(x), Some(y)) if x < y => {
+                i += 1;
+                (x, false)
+            }
+            (Some(x), None) => {
+                i += 1;
+                (x, false)
+            }
+            (_, Some(y)) => {
+                j += 1;
+                (y, false)
+            }
+            (None, None) => break,
+        };
+        if Some(next.0) != skip {
+            union += 1;
+            both += usize::from(next.1);
+        }
+    }
+    if union == 0 {
+        0.0
+    } else {
+        both as f64 / union as f64
+    }
+}
+
+impl Scorer for Knn {
+    fn score(&self, g: &str, labels: &BTreeSet<String>) -> f64 {
+        let skip = self.index.get(g).copied();
+        let query: Vec<usize> = labels
+            .iter()
+            .filter(|l| l.as_str() != g)
+            .filter_map(|l| self.index.get(l).copied())
+            .collect();
+        let base = self.regions.iter().filter(|(_, ls)| ls.contains(g)).count() as f64
+            / self.regions.len().max(1) as f64;
+        let mut sims: Vec<(f64, bool)> = self
+            .regions
+            .iter()
+            .map(|(known, ls)| (jaccard(&query, known, skip), ls.contains(g)))
+            .collect();
+        sims.sort_by(|a, b| b.0.total_cmp(&a.0));
+        let (mut num, mut den) = (base, 1.0);
+        for (s, y) in sims.iter().take(self.k) {
+            num += s * f64::from(u8::from(*y));
+            den += s;
+        }
+        num / den
+    }
+}
+
 /// Mean AUC over the six targets, and per target.
 fn evaluate(scored: &BTreeMap<&str, Vec<(f64, bool)>>) -> (f64, Vec<f64>) {
     let per: Vec<f64> = OBJECTNAV_CATEGORIES
@@ -374,10 +481,191 @@ fn partial_summary(
     (auc, rate(true), rate(false))
 }
 
+/// Scores per target: (score, target present) for each evaluated region.
+type Scored = BTreeMap<&'static str, Vec<(f64, bool)>>;
+
+/// The folds' scores in one table (the CV AUC pools the five held-out folds).
+fn concat(folds: &[Scored]) -> Scored {
+    let mut out = Scored::new();
+    for fold in folds {
+        for (g, v) in fold {
+            out.entry(g).or_default().extend_from_slice(v);
+        }
+    }
+    out
+}
+
+/// Each score replaced by its mid-rank in its own table, divided by the
+/// table's size (per target), so that models on other scales average.
+fn ranked(table: &Scored) -> Scored {
+    table
+        .iter()
+        .map(|(g, v)| {
+            let mut order: Vec<usize> = (0..v.len()).collect();
+            order.sort_by(|&a, &b| v[a].0.total_cmp(&v[b].0));
+            let mut r = vec![0.0; v.len()];
+            let mut i = 0;
+            while i < order.len() {
+                let mut j = i;
+                while j < order.len() && v[order[j]].0 == v[order[i]].0 {
+                    j += 1;
+                }
+                for &k in &order[i..j] {
+                    r[k] = (i + j + 1) as f64 / 2.0 / v.len() as f64;
+                }
+                i = j;
+            }
+            (*g, v.iter().zip(r).map(|(&(_, y), r)| (r, y)).collect())
+        })
+        .collect()
+}
+
+/// The mean of `tables`' ranks, region by region (all tables score the same
+/// regions in the same order).
+fn rank_average(tables: &[&Scored]) -> Scored {
+    let ranks: Vec<Scored> = tables.iter().map(|t| ranked(t)).collect();
+    let mut out = Scored::new();
+    for g in OBJECTNAV_CATEGORIES {
+        let n = ranks[0][g].len();
+        out.insert(
+            g,
+            (0..n)
+                .map(|i| {
+                    let s = ranks.iter().map(|r| r[g][i].0).sum::<f64>() / ranks.len() as f64;
+                    (s, ranks[0][g][i].1)
+                })
+                .collect(),
+        );
+    }
+    out
+}
+
+/// A model's name without its long parts, for the per-category row.
+fn short(name: &str) -> String {
+    name.replace("rank average: ", "ranks of ")
+        .replace("k-NN over label sets (Jaccard), k = 30", "k-NN")
+        .replace(
+            "naive Bayes, beta = 0.5 (shipped before)",
+            "naive Bayes 0.5",
+        )
+        .replace(
+            "observed-subset logistic, beta = 0.25, lambda = 50 (shipped)",
+            "shipped",
+        )
+}
+
+/// Rank averages of complementary models (ranks within each held-out fold
+/// and within val: they measure complementarity; a deployable version would
+/// rank against train scores) and a per-category choice among all models
+/// run, by train CV AUC only. Prints a Markdown table to stderr.
+fn ensembles(
+    kept: &BTreeMap<String, (Vec<Scored>, Scored)>,
+    json: &mut serde_json::Map<String, serde_json::Value>,
+) {
+    let nb = "naive Bayes, beta = 0.5 (shipped before)";
+    let shipped = kept
+        .keys()
+        .find(|k| k.contains("(shipped)"))
+        .cloned()
+        .unwrap_or_default();
+    let knn = "k-NN over label sets (Jaccard), k = 30";
+    let mut rows: Vec<(String, Vec<Scored>, Scored)> = Vec::new();
+    for pair in [[nb, shipped.as_str()], [knn, shipped.as_str()]] {
+        let (Some(a), Some(b)) = (kept.get(pair[0]), kept.get(pair[1])) else {
+            continue;
+        };
+        let folds =
+            a.0.iter()
+                .zip(&b.0)
+                .map(|(x, y)| rank_average(&[x, y]))
+                .collect();
+        rows.push((
+            format!("rank average: {} + {}", pair[0], pair[1]),
+            folds,
+            rank_average(&[&a.1, &b.1]),
+        ));
+    }
+    let mut all: Vec<(String, Scored, Scored)> = kept
+        .iter()
+        .map(|(n, (f, v))| (n.clone(), concat(f), v.clone()))
+        .collect();
+    all.extend(
+        rows.iter()
+            .map(|(n, f, v)| (n.clone(), concat(f), v.clone())),
+    );
+    let mut table = String::from(
+        "| combination | train-CV AUC per target | train-CV mean | val AUC per target | val mean |\n|---|---|---|---|---|\n",
+    );
+    let txt = |v: &[f64]| {
+        v.iter()
+            .map(|a| format!("{a:.3}"))
+            .collect::<Vec<_>>()
+            .join(" / ")
+    };
+    for (name, cv, val) in all.iter().filter(|(n, _, _)| n.starts_with("rank average")) {
+        let (cm, cp) = evaluate(cv);
+        let (vm, vp) = evaluate(val);
+        table.push_str(&format!(
+            "| {name} | {} | {cm:.3} | {} | {vm:.3} |\n",
+            txt(&cp),
+            txt(&vp)
+        ));
+        json.insert(
+            name.clone(),
+            serde_json::json!({"cv_mean_auc": cm, "cv_auc": cp, "val_mean_auc": vm, "val_auc": vp}),
+        );
+    }
+    // Per category, the model (or rank average) with the best train-CV AUC.
+    let (mut cp, mut vp, mut names) = (Vec::new(), Vec::new(), Vec::new());
+    for g in OBJECTNAV_CATEGORIES {
+        let best = all
+            .iter()
+            .map(|(n, cv, val)| {
+                (
+                    n,
+                    roc_auc(&cv[g]).unwrap_or(f64::NAN),
+                    roc_auc(&val[g]).unwrap_or(f64::NAN),
+                )
+            })
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((n, c, v)) = best {
+            cp.push(c);
+            vp.push(v);
+            names.push(format!("{g}: {}", short(n)));
+        }
+    }
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len().max(1) as f64;
+    table.push_str(&format!(
+        "| per category, best train-CV AUC ({}) | {} | {:.3} | {} | {:.3} |\n",
+        names.join("; "),
+        txt(&cp),
+        mean(&cp),
+        txt(&vp),
+        mean(&vp)
+    ));
+    json.insert(
+        "per_category_choice".into(),
+        serde_json::json!({"models": names, "cv_auc": cp, "val_auc": vp}),
+    );
+    eprintln!("{table}");
+}
+
 fn main() -> ExitCode {
-    let Some(dir) = std::env::args_os().nth(1).map(PathBuf::from) else {
-        eprintln!("usage: compare_models <hm3d-sem-stats folder>");
+    let mut args = std::env::args().skip(1);
+    let Some(dir) = args.next().map(PathBuf::from) else {
+        eprintln!("usage: compare_models <hm3d-sem-stats folder> [--only TEXT]");
         return ExitCode::from(2);
+    };
+    // `--only TEXT`: run only the models whose name contains TEXT (the
+    // naive Bayes shipped before and the shipped model always run: they are
+    // the false-conflict reference and the ensembles' partners).
+    let only: Option<String> = match (args.next().as_deref(), args.next()) {
+        (None, _) => None,
+        (Some("--only"), Some(text)) => Some(text),
+        _ => {
+            eprintln!("usage: compare_models <hm3d-sem-stats folder> [--only TEXT]");
+            return ExitCode::from(2);
+        }
     };
     let stats = match Hm3dStats::read_dir(&dir) {
         Ok(s) => s,
@@ -425,6 +713,9 @@ fn main() -> ExitCode {
             Box::new(Mixture::fit(rs, k, 0.5, temper)) as Box<dyn Scorer>
         })
     };
+    let knn = |k: usize| -> Fit {
+        Box::new(move |rs: &[&Hm3dRegion]| Box::new(Knn::fit(rs, k)) as Box<dyn Scorer>)
+    };
     let shipped = PriorBuildConfig::default();
     /// A model's name, its (beta, lambda) when it is in the subset-logistic
     /// grid, and how to fit it.
@@ -465,6 +756,14 @@ fn main() -> ExitCode {
             ));
         }
     }
+    models.push((
+        "k-NN over label sets (Jaccard), k = 30".into(),
+        None,
+        knn(30),
+    ));
+    models.retain(|(name, _, _)| {
+        only.as_ref().is_none_or(|t| name.contains(t.as_str())) || name.contains("(shipped")
+    });
     let threshold = sornav_supervisor::CommonsenseConfig::default().conflict_max_posterior;
     let vocab: BTreeSet<String> = CooccurrencePrior::embedded()
         .labels
@@ -480,22 +779,29 @@ fn main() -> ExitCode {
     let mut json = serde_json::Map::new();
     let mut grid: Vec<(f64, f64, f64, f64)> = Vec::new(); // beta, lambda, cv mean, cv fc+
     let mut nb_cv_fc = f64::NAN;
+    // Per model: its CV scores fold by fold and its val scores (for the
+    // rank averages and the per-category choice below).
+    let mut kept: BTreeMap<String, (Vec<Scored>, Scored)> = BTreeMap::new();
     for (name, hyper, fit) in &models {
-        let mut cv = BTreeMap::new();
+        let mut folds = Vec::with_capacity(FOLDS);
         let mut cv_partial = BTreeMap::new();
         for f in 0..FOLDS {
             let (inner, outer): (Vec<&Hm3dRegion>, Vec<&Hm3dRegion>) =
                 train.iter().partition(|r| fold_of(&r.scene) != f);
             let model = fit(&inner);
-            score_into(model.as_ref(), &outer, &mut cv);
+            let mut fold = BTreeMap::new();
+            score_into(model.as_ref(), &outer, &mut fold);
+            folds.push(fold);
             partial_into(model.as_ref(), &outer, &vocab, 3, &mut cv_partial);
         }
+        let cv = concat(&folds);
         let (cv_mean, cv_per) = evaluate(&cv);
         let (_, cv_fc_present, _) = partial_summary(&cv_partial, threshold);
         let mut held = BTreeMap::new();
         let full = fit(&train);
         score_into(full.as_ref(), &val, &mut held);
         let (val_mean, per) = evaluate(&held);
+        kept.insert(name.clone(), (folds, held.clone()));
         let (p_auc, fc_present, fc_absent) =
             partial_observation(full.as_ref(), &val, &vocab, 3, threshold);
         if name.contains("beta = 0.5 (shipped before)") {
@@ -529,6 +835,7 @@ fn main() -> ExitCode {
     }
     eprintln!("{summary}");
     eprintln!("{per_target}");
+    ensembles(&kept, &mut json);
     // The selection rule (train CV only).
     let chosen = grid
         .iter()
@@ -552,4 +859,77 @@ fn main() -> ExitCode {
     }
     println!("{}", serde_json::Value::Object(json));
     ExitCode::SUCCESS
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+
+        /// The merge-based Jaccard similarity equals a direct set
+        /// computation (`skip` removed from both sides), and lies in [0, 1].
+        #[test]
+        fn jaccard_matches_set_reference(
+            a in prop::collection::btree_set(0usize..20, 0..12),
+            b in prop::collection::btree_set(0usize..20, 0..12),
+            skip in prop::option::of(0usize..20),
+        ) {
+            let av: Vec<usize> = a.iter().copied().collect();
+            let bv: Vec<usize> = b.iter().copied().collect();
+            let keep = |x: &&usize| Some(**x) != skip;
+            let both = a.intersection(&b).filter(keep).count();
+            let union = a.union(&b).filter(keep).count();
+            let expected = if union == 0 { 0.0 } else { both as f64 / union as f64 };
+            let got = jaccard(&av, &bv, skip);
+            prop_assert_eq!(got, expected);
+            prop_assert!((0.0..=1.0).contains(&got));
+            prop_assert_eq!(got, jaccard(&bv, &av, skip));
+        }
+
+        /// `ranked` gives each score its mid-rank over n (count of smaller
+        /// scores plus half the ties, one's own included), counted pair by
+        /// pair; ranks keep the order of the scores, so the AUC is unchanged.
+        #[test]
+        fn ranks_match_pairwise_counts(v in prop::collection::vec((0u8..6, any::<bool>()), 1..30)) {
+            let scores: Vec<(f64, bool)> = v.iter().map(|&(s, y)| (f64::from(s), y)).collect();
+            let mut table = Scored::new();
+            table.insert("chair", scores.clone());
+            let r = &ranked(&table)["chair"];
+            let n = scores.len() as f64;
+            for (i, (s, y)) in scores.iter().enumerate() {
+                let less = scores.iter().filter(|(t, _)| t < s).count() as f64;
+                let ties = scores.iter().filter(|(t, _)| t == s).count() as f64;
+                prop_assert!((r[i].0 - (less + (ties + 1.0) / 2.0) / n).abs() < 1e-12);
+                prop_assert_eq!(r[i].1, *y);
+            }
+            prop_assert_eq!(roc_auc(r), roc_auc(&scores));
+        }
+    }
+
+    #[test]
+    fn knn_gives_the_base_rate_without_evidence_and_follows_neighbours() {
+        let region = |labels: &[&str]| Hm3dRegion {
+            scene: "s".into(),
+            region: 0,
+            split: Split::Train,
+            labels: labels.iter().map(|l| (*l).to_owned()).collect(),
+        };
+        let mut regions = Vec::new();
+        for _ in 0..20 {
+            regions.push(region(&["toilet", "sink", "towel"]));
+            regions.push(region(&["bed", "pillow", "wardrobe"]));
+        }
+        let refs: Vec<&Hm3dRegion> = regions.iter().collect();
+        let knn = Knn::fit(&refs, 5);
+        let set = |ls: &[&str]| ls.iter().map(|l| (*l).to_owned()).collect::<BTreeSet<_>>();
+        assert_eq!(knn.score("toilet", &set(&[])), 0.5);
+        assert_eq!(knn.score("toilet", &set(&["spaceship"])), 0.5);
+        // Five bathrooms of similarity 1: (5 + 0.5) / (5 + 1).
+        assert!((knn.score("toilet", &set(&["sink", "towel"])) - 5.5 / 6.0).abs() < 1e-12);
+        // Bedrooms of similarity 2/3 (bed is not the target): 0.5 / (5 * 2/3 + 1).
+        assert!((knn.score("toilet", &set(&["pillow", "wardrobe"])) - 1.5 / 13.0).abs() < 1e-12);
+    }
 }
