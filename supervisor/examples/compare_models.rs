@@ -58,6 +58,23 @@ struct Logistic {
     weights: BTreeMap<String, Vec<f64>>, // [intercept, w_1..w_p]
 }
 
+/// The labels in at least `min_regions` train regions (the library's
+/// default), numbered in label order.
+fn vocabulary(train: &[&Hm3dRegion]) -> BTreeMap<String, usize> {
+    let mut counts: BTreeMap<String, u64> = BTreeMap::new();
+    for r in train {
+        for l in &r.labels {
+            *counts.entry(l.clone()).or_default() += 1;
+        }
+    }
+    counts
+        .into_iter()
+        .filter(|(_, n)| *n >= PriorBuildConfig::default().min_regions)
+        .enumerate()
+        .map(|(i, (l, _))| (l, i))
+        .collect()
+}
+
 fn sigmoid(z: f64) -> f64 {
     1.0 / (1.0 + (-z).exp())
 }
@@ -72,18 +89,7 @@ impl Logistic {
     }
 
     fn fit(train: &[&Hm3dRegion], lambda: f64) -> Self {
-        let mut counts: BTreeMap<String, u64> = BTreeMap::new();
-        for r in train {
-            for l in &r.labels {
-                *counts.entry(l.clone()).or_default() += 1;
-            }
-        }
-        let vocab: BTreeMap<String, usize> = counts
-            .into_iter()
-            .filter(|(_, n)| *n >= PriorBuildConfig::default().min_regions)
-            .enumerate()
-            .map(|(i, (l, _))| (l, i))
-            .collect();
+        let vocab = vocabulary(train);
         let mut model = Logistic {
             vocab,
             weights: BTreeMap::new(),
@@ -161,18 +167,7 @@ struct Mixture {
 
 impl Mixture {
     fn fit(train: &[&Hm3dRegion], k: usize, a: f64, temper: f64) -> Self {
-        let mut counts: BTreeMap<String, u64> = BTreeMap::new();
-        for r in train {
-            for l in &r.labels {
-                *counts.entry(l.clone()).or_default() += 1;
-            }
-        }
-        let index: BTreeMap<String, usize> = counts
-            .into_iter()
-            .filter(|(_, n)| *n >= PriorBuildConfig::default().min_regions)
-            .enumerate()
-            .map(|(i, (l, _))| (l, i))
-            .collect();
+        let index = vocabulary(train);
         let v = index.len();
         let xs: Vec<Vec<usize>> = train
             .iter()
