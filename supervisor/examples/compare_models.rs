@@ -295,18 +295,7 @@ struct Knn {
 
 impl Knn {
     fn fit(train: &[&Hm3dRegion], k: usize) -> Self {
-        let mut counts: BTreeMap<String, u64> = BTreeMap::new();
-        for r in train {
-            for l in &r.labels {
-                *counts.entry(l.clone()).or_default() += 1;
-            }
-        }
-        let index: BTreeMap<String, usize> = counts
-            .into_iter()
-            .filter(|(_, n)| *n >= PriorBuildConfig::default().min_regions)
-            .enumerate()
-            .map(|(i, (l, _))| (l, i))
-            .collect();
+        let index = vocabulary(train);
         let regions = train
             .iter()
             .map(|r| {
