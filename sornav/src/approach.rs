@@ -1,7 +1,7 @@
 //! Placing a `NAV_TO_OBJECT` waypoint next to a target candidate.
 
 use nalgebra::{Point2, Point3};
-use sornav_frontier_graph::{FrontierError, LevelId, MultiLevelMap, OccupancyGrid};
+use sornav_frontier_graph::{CellState, FrontierError, LevelId, MultiLevelMap, OccupancyGrid};
 use sornav_semantic_map::SemanticMap;
 
 use crate::config::ApproachConfig;
@@ -62,6 +62,35 @@ fn lattice_disc(step: f64, radius: f64) -> (Vec<(i32, i32)>, usize) {
         }
     }
     (out, m.unsigned_abs() as usize)
+}
+
+/// Whether no occupied cell of `grid` has its centre within `clearance`
+/// of `p` (the waypoint is *roomy*, see
+/// [`ApproachConfig::clearance_margin_m`]); always when `clearance` is
+/// no more than the grid's robot radius (no margin).
+///
+/// # Complexity
+/// O((clearance / resolution)²).
+fn roomy(grid: &OccupancyGrid, p: &Point2<f64>, clearance: f64) -> bool {
+    if clearance <= grid.config().robot_radius {
+        // No margin: every traversable waypoint is roomy.
+        return true;
+    }
+    let Ok(c) = grid.cell_of(p) else {
+        return false;
+    };
+    let res = grid.resolution();
+    // Bounded: the clearance is validated (radius <= 200 cells, margin <= 1 m).
+    #[allow(clippy::cast_possible_truncation)]
+    let k = (clearance / res).ceil().clamp(0.0, 1000.0) as i32;
+    let r2 = clearance * clearance;
+    (-k..=k).all(|dy| {
+        (-k..=k).all(|dx| {
+            let cell = c.offset(dx, dy);
+            (grid.cell_center(cell) - p).norm_squared() > r2
+                || grid.state(cell) != CellState::Occupied
+        })
+    })
 }
 
 /// The sight of the object from the poses of a square lattice, each
@@ -145,6 +174,16 @@ impl SightLattice<'_> {
 ///    [`ViewDemand::RequireClear`]);
 /// 7. with [`ViewDemand::Prefer`] only, every sample.
 ///
+/// Each of tiers 1 to 6 is split in three: *roomy* samples (no occupied
+/// cell within the robot radius plus
+/// [`ApproachConfig::clearance_margin_m`]) first, then roomy samples
+/// beyond the standoff, up to [`ApproachConfig::roomy_standoff_m`], then
+/// *snug* samples within the standoff: a settled clear view point in a
+/// gap the inflated map only just admits ranks after a roomy one farther
+/// out (tiers 1, 2, the roomy 1, 2 beyond the standoff, then the snug 1,
+/// 2; and so on). Samples beyond the standoff lie on the same lattice,
+/// which extends by whole steps, so the samples within it do not move.
+///
 /// In each tier in turn, the `max_path_queries` candidates nearest to the
 /// robot (Euclidean) are tried with the frontier map's exact shortest path
 /// (through the level's grid and the stairs); the one with the shortest
@@ -153,8 +192,9 @@ impl SightLattice<'_> {
 /// unknown.
 ///
 /// # Complexity
-/// O(S' (P + 27) L) for S' lattice poses (the samples and the lattice
-/// within the arrival radius around them, each judged once), P <= 48
+/// O(S' (P + 27) L + S c²) for S' lattice poses (the samples and the
+/// lattice within the arrival radius around them, each judged once), S
+/// samples, c the clearance in cells, P <= 48
 /// object points and L voxels per line of sight, plus `max_path_queries`
 /// shortest-path searches per tier tried (each O(N) in the traversable
 /// cells).
@@ -178,7 +218,13 @@ pub(crate) fn approach_waypoint(
     let floor = level_map.config().grid.floor_z;
     let (lo, hi) = object.footprint();
     let step = config.sample_step_m;
-    let reach = config.standoff_m;
+    let window = config.standoff_m;
+    // Roomy samples beyond the standoff: whole lattice steps, so that the
+    // lattice (and the samples within the standoff) stay where they are.
+    let extra = ((config.roomy_standoff_m - window) / step)
+        .ceil()
+        .clamp(0.0, 200.0);
+    let reach = window + extra * step;
     let nx = ((hi.x - lo.x + 2.0 * reach) / step)
         .ceil()
         .clamp(0.0, 4000.0) as usize;
@@ -194,14 +240,15 @@ pub(crate) fn approach_waypoint(
                 lo.y - reach + j as f64 * step,
             );
             let d = distance_to_box(&p, &lo, &hi);
-            if d > reach || d < config.min_standoff_m {
+            let extended = d > window;
+            if (extended && d > config.roomy_standoff_m) || d < config.min_standoff_m {
                 continue;
             }
             let Ok(cell) = grid.cell_of(&p) else {
                 continue;
             };
             if grid.is_traversable(cell) {
-                samples.push((i, j, Point3::new(p.x, p.y, floor)));
+                samples.push((i, j, Point3::new(p.x, p.y, floor), extended));
             }
         }
     }
@@ -225,9 +272,20 @@ pub(crate) fn approach_waypoint(
             n: (nx + 1 + 2 * m, ny + 1 + 2 * m),
             sights: vec![None; (nx + 1 + 2 * m) * (ny + 1 + 2 * m)],
         };
-        // ranked[2 * (0 settled clear, 1 clear, 2 glimpse) + beyond the margin]
-        let mut ranked: [Vec<Point3<f64>>; 6] = Default::default();
-        for &(i, j, p) in &samples {
+        let clearance = grid.config().robot_radius + config.clearance_margin_m;
+        // ranked[6 * (0 settled clear, 1 clear, 2 glimpse) + 2 * (0 roomy
+        // within the standoff, 1 roomy beyond it, 2 snug within it) +
+        // beyond the reach margin]; snug samples beyond the standoff are
+        // not used.
+        let mut ranked: [Vec<Point3<f64>>; 18] = Default::default();
+        for &(i, j, p, extended) in &samples {
+            let room = if roomy(grid, &p.xy(), clearance) {
+                usize::from(extended)
+            } else if extended {
+                continue;
+            } else {
+                2
+            };
             let (i, j) = (i + m, j + m);
             let kind = match lattice.sight(i, j) {
                 None | Some(Sight::Hidden) => continue,
@@ -235,17 +293,23 @@ pub(crate) fn approach_waypoint(
                 Some(Sight::Clear) => usize::from(!lattice.settled(i, j, &disc)),
             };
             let far = usize::from(object.reach(&p, viewer.eye_height) > margin);
-            ranked[2 * kind + far].push(p);
+            ranked[6 * kind + 2 * room + far].push(p);
         }
         let keep = if demand == ViewDemand::RequireClear {
-            4
+            12
         } else {
-            6
+            18
         };
         tiers.extend(ranked.into_iter().take(keep));
     }
     if demand == ViewDemand::Prefer {
-        tiers.push(samples.into_iter().map(|(_, _, p)| p).collect());
+        tiers.push(
+            samples
+                .into_iter()
+                .filter(|s| !s.3)
+                .map(|(_, _, p, _)| p)
+                .collect(),
+        );
     }
     let robot2 = robot.xy();
     for mut tier in tiers {
@@ -275,6 +339,7 @@ mod tests {
     use super::*;
     use crate::view::tests::{LEVEL, room_with_box, solid, voxel_map};
     use proptest::prelude::*;
+    use sornav_frontier_graph::Cell;
 
     fn grid(map: &MultiLevelMap) -> &sornav_frontier_graph::OccupancyGrid {
         map.level_map(LevelId(0)).unwrap().grid()
@@ -287,10 +352,12 @@ mod tests {
         robot: Point3<f64>,
         (lo, hi): (Point2<f64>, Point2<f64>),
         config: &ApproachConfig,
-        keep: impl Fn(&Point3<f64>) -> bool,
+        keep: impl Fn(&Point3<f64>, bool) -> bool,
     ) -> f64 {
         let step = config.sample_step_m;
-        let reach = config.standoff_m;
+        let window = config.standoff_m;
+        let extra = ((config.roomy_standoff_m - window) / step).ceil().max(0.0);
+        let reach = window + extra * step;
         let mut brute = f64::INFINITY;
         let nx = ((hi.x - lo.x + 2.0 * reach) / step).ceil() as usize;
         let ny = ((hi.y - lo.y + 2.0 * reach) / step).ceil() as usize;
@@ -301,12 +368,13 @@ mod tests {
                     lo.y - reach + j as f64 * step,
                 );
                 let d = distance_to_box(&s, &lo, &hi);
-                if d > reach || d < config.min_standoff_m {
+                let extended = d > window;
+                if (extended && d > config.roomy_standoff_m) || d < config.min_standoff_m {
                     continue;
                 }
                 let c = grid(map).cell_of(&s).unwrap();
                 let p = Point3::new(s.x, s.y, 0.0);
-                if !grid(map).is_traversable(c) || !keep(&p) {
+                if !grid(map).is_traversable(c) || !keep(&p, extended) {
                     continue;
                 }
                 if let Some(e) = map.path(&robot, &p).unwrap() {
@@ -356,7 +424,7 @@ mod tests {
             prop_assert!(grid(&map).is_traversable(cell));
             prop_assert!((path[0] - robot).norm() <= 0.1);
             prop_assert!((path[path.len() - 1] - p).norm() <= 0.1);
-            let brute = brute_force(&mut map, robot, (lo, hi), &config, |_| true);
+            let brute = brute_force(&mut map, robot, (lo, hi), &config, |_, extended| !extended);
             let len = |p: &Point3<f64>, map: &mut MultiLevelMap| map.path(&robot, p).unwrap().unwrap().length;
             prop_assert!((len(&q, &mut map) - brute).abs() < 1e-9);
             prop_assert!(len(&p, &mut map) >= brute - 1e-9);
@@ -364,10 +432,13 @@ mod tests {
 
         /// A required view point is one ([`ObjectView::seen_from`]), and
         /// with unlimited queries it is the brute-force nearest (by path)
-        /// of the first reachable tier: clear view points within the reach
-        /// less the arrival radius, the other clear ones, then the same
-        /// for glimpses. A required clear view point is the nearest of the
-        /// first two tiers, or none.
+        /// of the first reachable tier: settled clear view points, roomy
+        /// ones within the standoff and the reach less the arrival radius,
+        /// the other roomy ones, the same for roomy ones beyond the
+        /// standoff (up to `roomy_standoff_m`), then for snug ones within
+        /// it; then the same for the other clear view points and for
+        /// glimpses. A required clear view point is the nearest of the
+        /// first twelve tiers, or none.
         #[test]
         fn required_view_point_is_seen_and_matches_brute_force(
             x in 1.5f64..3.0,
@@ -376,6 +447,7 @@ mod tests {
             h in 0.2f64..0.8,
             z in 0.0f64..1.2,
             k in 1usize..=27,
+            beyond in prop_oneof![Just(0.0f64), 0.0f64..0.4],
         ) {
             let mut map = room_with_box(Point2::new(x, y), Point2::new(x + w, y + h));
             let (voxels, keys) = voxel_map(&[solid(x, y, z, x + w, y + h, z + 0.3)]);
@@ -385,6 +457,7 @@ mod tests {
             let config = ApproachConfig {
                 max_path_queries: usize::MAX,
                 min_box_samples: k,
+                roomy_standoff_m: if beyond > 0.0 { ApproachConfig::default().standoff_m + beyond } else { 0.0 },
                 ..ApproachConfig::default()
             };
             let rule = config.view_rule();
@@ -410,22 +483,40 @@ mod tests {
                     })
                 })
             };
-            let tiers: Vec<f64> = [
-                (Sight::Clear, Some(true), true),
-                (Sight::Clear, Some(true), false),
-                (Sight::Clear, Some(false), true),
-                (Sight::Clear, Some(false), false),
-                (Sight::Glimpse, None, true),
-                (Sight::Glimpse, None, false),
-            ]
-            .into_iter()
-            .map(|(s, settle, n)| {
-                brute_force(&mut map.clone(), robot, (lo, hi), &config, |p| {
-                    sight(p) == s && settle.is_none_or(|t| settled(p) == t) && near(p) == n
-                })
-            })
-            .collect();
-            for (demand, depth) in [(ViewDemand::Require, 6), (ViewDemand::RequireClear, 4)] {
+            // Roomy: every occupied cell of the grid (brute force over
+            // its bounds) farther than the clearance.
+            let occupied: Vec<Point2<f64>> = {
+                let g = grid(&map);
+                let (a, b) = g.bounds().unwrap();
+                (a.y..=b.y)
+                    .flat_map(|y| (a.x..=b.x).map(move |x| Cell::new(x, y)))
+                    .filter(|&c| g.state(c) == CellState::Occupied)
+                    .map(|c| g.cell_center(c))
+                    .collect()
+            };
+            let clearance = grid(&map).config().robot_radius + config.clearance_margin_m;
+            let roomy = |p: &Point3<f64>| occupied.iter().all(|q| (q - p.xy()).norm() > clearance);
+            let mut tiers: Vec<f64> = Vec::new();
+            for (s, settle) in [
+                (Sight::Clear, Some(true)),
+                (Sight::Clear, Some(false)),
+                (Sight::Glimpse, None),
+            ] {
+                // (roomy, beyond the standoff): roomy within, roomy beyond,
+                // snug within; snug beyond is never used.
+                for (r, e) in [(true, false), (true, true), (false, false)] {
+                    for n in [true, false] {
+                        tiers.push(brute_force(&mut map.clone(), robot, (lo, hi), &config, |p, extended| {
+                            sight(p) == s
+                                && settle.is_none_or(|t| settled(p) == t)
+                                && roomy(p) == r
+                                && extended == e
+                                && near(p) == n
+                        }));
+                    }
+                }
+            }
+            for (demand, depth) in [(ViewDemand::Require, 18), (ViewDemand::RequireClear, 12)] {
                 let target = ApproachTarget {
                     object: &view,
                     voxels: &voxels,
@@ -478,5 +569,70 @@ mod tests {
         };
         let preferred = approach_waypoint(&mut map, robot, LevelId(0), &prefer, &config).unwrap();
         assert!(preferred.is_some());
+    }
+
+    /// Two posts make a gap the inflated map only just admits, straight
+    /// between the robot and the object: with a clearance margin the
+    /// waypoint is a roomy one beside the gap, without one the gap's own
+    /// sample (the nearer) is taken.
+    #[test]
+    fn a_roomy_waypoint_wins_over_a_snug_gap() {
+        use sornav_frontier_graph::FrontierMapConfig;
+        let mut map = MultiLevelMap::new(FrontierMapConfig::default()).unwrap();
+        // Free floor all around (returns on the floor), then two posts
+        // 0.42 m apart (centres), on the line from the robot to the object.
+        let mut floor = Vec::new();
+        for k in 0..720 {
+            let t = f64::from(k) * std::f64::consts::PI / 360.0;
+            floor.push(Point3::new(3.9 * t.cos(), 3.9 * t.sin(), 0.0));
+        }
+        let posts = [(1.6, 0.2), (1.6, -0.25)];
+        let origin = Point3::new(0.0, 0.0, 0.88);
+        map.update(&Point3::origin(), &origin, &floor).unwrap();
+        for _ in 0..4 {
+            let hits: Vec<Point3<f64>> =
+                posts.iter().map(|&(x, y)| Point3::new(x, y, 0.5)).collect();
+            map.update(&Point3::origin(), &origin, &hits).unwrap();
+        }
+        let (voxels, keys) = voxel_map(&[solid(2.2, -0.15, 0.3, 2.5, 0.15, 0.7)]);
+        let view = ObjectView::new(&keys[0], voxels.resolution()).unwrap();
+        let target = ApproachTarget {
+            object: &view,
+            voxels: &voxels,
+            viewer: LEVEL,
+            arrival_radius_m: 0.3,
+            demand: ViewDemand::Prefer,
+        };
+        let g = grid(&map);
+        let gap = Point2::new(1.6, -0.03);
+        assert!(
+            g.is_traversable(g.cell_of(&gap).unwrap()),
+            "the gap is passable on the map"
+        );
+        assert!(!roomy(g, &gap, g.config().robot_radius + 0.05));
+        let robot = Point3::origin();
+        let pick = |margin: f64, map: &mut MultiLevelMap| {
+            let config = ApproachConfig {
+                line_of_sight: true,
+                min_standoff_m: 0.4,
+                standoff_m: 0.7,
+                roomy_standoff_m: 0.85,
+                clearance_margin_m: margin,
+                ..ApproachConfig::default()
+            };
+            approach_waypoint(map, robot, LevelId(0), &target, &config)
+                .unwrap()
+                .unwrap()
+                .0
+        };
+        let snug = pick(0.0, &mut map);
+        let roomy_pick = pick(0.05, &mut map);
+        let g = grid(&map);
+        let clearance = g.config().robot_radius + 0.05;
+        assert!(
+            !roomy(g, &snug.xy(), clearance),
+            "without a margin the snug gap wins: {snug:?}"
+        );
+        assert!(roomy(g, &roomy_pick.xy(), clearance), "{roomy_pick:?}");
     }
 }

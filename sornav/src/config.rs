@@ -144,6 +144,22 @@ pub struct ApproachConfig {
     /// disagree (a line grazing a voxel, a sample in the open middle of a
     /// chair's bounds). 2 or less makes every view point clear. Default 8.
     pub min_box_samples: usize,
+    /// Clearance margin (m) of a *roomy* waypoint: no occupied cell of the
+    /// level's grid within the robot radius plus this margin of it. Within
+    /// each sight class, roomy waypoints are preferred to snug ones (a
+    /// waypoint the inflated map only just admits, in a gap between chairs
+    /// or beside a table whose rim the sensor saw only in part, is often
+    /// one the robot's body does not reach). 0 makes every traversable
+    /// waypoint roomy. Default 0.05 (the half diagonal of a 5 cm cell,
+    /// the map's own position error, plus a little).
+    pub clearance_margin_m: f64,
+    /// Largest horizontal distance (m) from a *roomy* waypoint to the
+    /// object's bounds: roomy waypoints between `standoff_m` and this are
+    /// tried after the roomy ones within `standoff_m` and before the snug
+    /// ones (an object whose near side is hemmed in, a plant on a round
+    /// table ringed by chairs, is then approached from where the robot
+    /// fits). Values up to `standoff_m` add nothing. Default 0.
+    pub roomy_standoff_m: f64,
 }
 
 impl ApproachConfig {
@@ -172,6 +188,8 @@ impl Default for ApproachConfig {
             stop_in_view_attempts: 2,
             view_arrival_m: 0.2,
             min_box_samples: 8,
+            clearance_margin_m: 0.05,
+            roomy_standoff_m: 0.0,
         }
     }
 }
@@ -589,11 +607,16 @@ impl AgentConfig {
             && a.vfov_margin_deg.is_finite()
             && (0.0..90.0).contains(&a.vfov_margin_deg)
             && a.stop_in_view_attempts <= 16
-            && (1..=27).contains(&a.min_box_samples))
+            && (1..=27).contains(&a.min_box_samples)
+            && a.clearance_margin_m.is_finite()
+            && (0.0..=1.0).contains(&a.clearance_margin_m)
+            && a.roomy_standoff_m.is_finite()
+            && a.roomy_standoff_m >= 0.0
+            && a.roomy_standoff_m / a.sample_step_m <= 200.0)
         {
             return Err(component(
                 "approach",
-                "need max_reach_m > 0, view_arrival_m > 0, min_visible_share in [0, 1], vfov_margin_deg in [0, 90), stop_in_view_attempts <= 16, min_box_samples in 1..=27",
+                "need max_reach_m > 0, view_arrival_m > 0, min_visible_share in [0, 1], vfov_margin_deg in [0, 90), stop_in_view_attempts <= 16, min_box_samples in 1..=27, clearance_margin_m in [0, 1], roomy_standoff_m >= 0 and at most 200 samples",
             ));
         }
         if !self.commitment.is_valid() {

@@ -127,6 +127,13 @@ fn unknown_fields_and_bad_values_are_errors() {
         ("approach", "[approach]\nstop_in_view_attempts = 17\n"),
         ("approach", "[approach]\nmin_box_samples = 0\n"),
         ("approach", "[approach]\nmin_box_samples = 28\n"),
+        // Roomy waypoints.
+        ("approach", "[approach]\nclearance_margin_m = -0.1\n"),
+        ("approach", "[approach]\nclearance_margin_m = nan\n"),
+        ("approach", "[approach]\nclearance_margin_m = 1.5\n"),
+        ("approach", "[approach]\nroomy_standoff_m = -1.0\n"),
+        ("approach", "[approach]\nroomy_standoff_m = inf\n"),
+        ("approach", "[approach]\nroomy_standoff_m = 1000.0\n"),
     ] {
         match AgentConfig::from_toml(doc) {
             Err(ConfigError::Component { component: c, .. }) => assert_eq!(c, component, "{doc}"),
