@@ -59,8 +59,12 @@ pub enum AgentCommand {
         /// The active mission.
         mission: Option<MissionId>,
     },
-    /// The robot is at a target candidate: turn toward `look_at` and send a
-    /// fresh observation; the gate confirms or rejects it.
+    /// Turn toward `look_at` and send a fresh observation: the robot is at
+    /// a target candidate (the gate confirms or rejects it), or, while
+    /// searching, a candidate seen fewer than `N_obs` times is within
+    /// 4 m and out of the latest frame (a *second look*, at most six turns
+    /// per candidate and support value; the active mission, if any, is
+    /// continued afterwards).
     Verify {
         /// The candidate (semantic-map cluster id).
         object: ObjectId,
@@ -135,7 +139,20 @@ enum StopView {
 struct TargetState {
     target: Target,
     gate: TargetGate<String>,
+    /// Second looks at unconfirmed candidates: per candidate, the support
+    /// `s_t` at the last look and the looks spent at that support.
+    looks: BTreeMap<u64, (u32, u32)>,
 }
+
+/// Horizontal distance (m) within which an unconfirmed candidate (seen,
+/// but fewer than `N_obs` times) gets a second look: within the depth
+/// range, where a detection can still add support.
+const LOOK_RANGE_M: f64 = 4.0;
+
+/// Turns toward one unconfirmed candidate (at one support value) before
+/// the agent gives up looking at it: half a turn, enough to face anything
+/// around the robot.
+const LOOK_BUDGET: u32 = 6;
 
 /// Arrivals at the same open stair end before it is excluded like any
 /// reached frontier.
@@ -800,7 +817,11 @@ impl Agent {
         self.drop_looks = 0;
         self.near_looks = 0;
         self.drop_look = None;
-        let state = self.target.insert(TargetState { target, gate });
+        let state = self.target.insert(TargetState {
+            target,
+            gate,
+            looks: BTreeMap::new(),
+        });
         Ok(&state.target)
     }
 
@@ -1423,9 +1444,75 @@ impl Agent {
                     look_at: centre,
                 });
             }
-            GateCommand::Search | GateCommand::NavToObject { .. } => {}
+            GateCommand::Search => {
+                if let Some((object, centre)) = self.second_look(pose) {
+                    self.stats.second_looks += 1;
+                    self.decide(
+                        now,
+                        DecisionStep::TargetVerification,
+                        DecisionAction::Verify,
+                        None,
+                        format!(
+                            "candidate {} seen fewer than N_obs times: face it and observe",
+                            object.0
+                        ),
+                    );
+                    return Err(AgentCommand::Verify {
+                        object,
+                        look_at: centre,
+                    });
+                }
+            }
+            GateCommand::NavToObject { .. } => {}
         }
         Ok(gate_command)
+    }
+
+    /// A second look while searching: the nearest tracked candidate seen at
+    /// least once but fewer than `N_obs` times, not detected in the latest
+    /// frame, not cooling down after a rejection, within [`LOOK_RANGE_M`]
+    /// horizontally and 2 m vertically of the robot, that has had fewer
+    /// than [`LOOK_BUDGET`] looks at its current support. A candidate seen
+    /// in passing (two frames of a turn) otherwise waits for ever while
+    /// the robot explores elsewhere: nothing else brings it back into
+    /// view. The look turns the camera toward it; a detection adds
+    /// support, and at `N_obs` the gate accepts it as usual.
+    ///
+    /// # Complexity
+    /// O(T log T) for T tracked candidates.
+    fn second_look(&mut self, pose: &RobotPose) -> Option<(ObjectId, Point3<f64>)> {
+        let state = self.target.as_mut()?;
+        let tracker = state.gate.tracker();
+        let n_obs = tracker.config().n_obs;
+        let latest = tracker.updates();
+        let feet = pose.position;
+        let mut near: Vec<(f64, ObjectId, Point3<f64>, u32)> = tracker
+            .tracks()
+            .filter(|t| {
+                t.evidence.support > 0
+                    && t.evidence.support < n_obs
+                    && t.last_detected < latest
+                    && tracker.rejected_until(t.object).is_none()
+                    && (t.centre.z - feet.z).abs() <= 2.0
+            })
+            .map(|t| {
+                let d = (t.centre.xy() - feet.xy()).norm();
+                (d, t.object, t.centre, t.evidence.support)
+            })
+            .filter(|(d, ..)| *d <= LOOK_RANGE_M)
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+        for (_, object, centre, support) in near {
+            let entry = state.looks.entry(object.0).or_insert((support, 0));
+            if entry.0 != support {
+                *entry = (support, 0);
+            }
+            if entry.1 < LOOK_BUDGET {
+                entry.1 += 1;
+                return Some((object, centre));
+            }
+        }
+        None
     }
 
     /// Phase 3 of [`step`](Self::step): brings G_F up to date for the

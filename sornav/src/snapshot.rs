@@ -249,6 +249,10 @@ pub struct AgentStats {
     /// stuck where it started (the goal kept instead of excluded).
     #[serde(default)]
     pub back_offs: u64,
+    /// Second looks: turns toward a candidate seen fewer than `N_obs`
+    /// times while searching (returned as [`AgentCommand::Verify`](crate::AgentCommand::Verify)).
+    #[serde(default)]
+    pub second_looks: u64,
 }
 
 /// Everything needed to draw the agent's state (serde).

@@ -174,6 +174,51 @@ fn a_single_sighting_is_not_pursued() {
     }
 }
 
+/// A candidate seen in passing (once, fewer than N_obs = 3 times) and
+/// then out of the frame gets a second look while the robot searches:
+/// the agent turns the camera toward it (`Verify` with its centre) a
+/// bounded number of times, and a new detection counts as support, so
+/// that the candidate is approached after the look.
+#[test]
+fn a_candidate_seen_in_passing_gets_a_second_look() {
+    let world = two_rooms();
+    let mut without_tv = two_rooms();
+    without_tv.blocks.pop();
+    let mut agent = Agent::new(AgentConfig::default()).unwrap();
+    agent.set_target("tv").unwrap();
+    let robot = Robot::new(9.0, 2.5);
+    let seen = world.observation(robot.pose);
+    let unseen = without_tv.observation(robot.pose);
+    let is_look = |c: &AgentCommand| {
+        matches!(c, AgentCommand::Verify { look_at, .. }
+            if (look_at.x - 10.5).abs() < 0.4 && (look_at.y - 3.8).abs() < 0.4)
+    };
+    let mut t = 0u64;
+    let mut step = |agent: &mut Agent, observation| {
+        agent.observe(observation).unwrap();
+        t += 1;
+        agent.step(std::time::Duration::from_secs(t)).unwrap()
+    };
+    // Seen once: tracked, and no look while it is in the frame.
+    assert!(!is_look(&step(&mut agent, &seen)));
+    // Out of the frame: looks, at most half a turn's worth.
+    let looks: Vec<bool> = (0..10)
+        .map(|_| is_look(&step(&mut agent, &unseen)))
+        .collect();
+    assert!(looks[0], "{looks:?}");
+    let n = looks.iter().filter(|l| **l).count();
+    assert_eq!(n, 6, "{looks:?}");
+    assert_eq!(agent.stats().second_looks, 6);
+    assert!(!looks[9]);
+    // Seen again (twice more): N_obs reached, the candidate is approached.
+    assert!(!is_look(&step(&mut agent, &seen)));
+    let command = step(&mut agent, &seen);
+    assert!(
+        matches!(&command, AgentCommand::Dispatch { mission, .. } if mission.kind.name() == "nav_to_object"),
+        "{command:?}"
+    );
+}
+
 #[test]
 fn several_targets_in_a_row_keep_the_maps() {
     let world = two_rooms();
