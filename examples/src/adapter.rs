@@ -811,14 +811,11 @@ impl<F: AgentFactory> SornavPolicy<F> {
                         // The target category's objects and the gate's
                         // candidate tracks (support s_t / misses m_t).
                         let snapshot = agent.snapshot();
+                        let category = snapshot.target.as_ref().map(|t| &t.category);
                         let objects: Vec<String> = snapshot
                             .objects
                             .iter()
-                            .filter(|o| {
-                                o.label.is_some()
-                                    && o.label
-                                        == snapshot.target.as_ref().map(|t| t.category.clone())
-                            })
+                            .filter(|o| category.is_some() && o.label.as_ref() == category)
                             .map(|o| {
                                 format!(
                                     "{} voxels {} obs {} at ({:.2},{:.2},{:.2})",

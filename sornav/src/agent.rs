@@ -149,6 +149,10 @@ struct TargetState {
 /// range, where a detection can still add support.
 const LOOK_RANGE_M: f64 = 4.0;
 
+/// Vertical distance (m) from the robot's feet within which an unconfirmed
+/// candidate gets a second look (on the robot's floor, not one above).
+const LOOK_HEIGHT_M: f64 = 2.0;
+
 /// Turns toward one unconfirmed candidate (at one support value) before
 /// the agent gives up looking at it: half a turn, enough to face anything
 /// around the robot.
@@ -1471,7 +1475,7 @@ impl Agent {
     /// A second look while searching: the nearest tracked candidate seen at
     /// least once but fewer than `N_obs` times, not detected in the latest
     /// frame, not cooling down after a rejection, within [`LOOK_RANGE_M`]
-    /// horizontally and 2 m vertically of the robot, that has had fewer
+    /// horizontally and [`LOOK_HEIGHT_M`] vertically of the robot, that has had fewer
     /// than [`LOOK_BUDGET`] looks at its current support. A candidate seen
     /// in passing (two frames of a turn) otherwise waits for ever while
     /// the robot explores elsewhere: nothing else brings it back into
@@ -1493,7 +1497,7 @@ impl Agent {
                     && t.evidence.support < n_obs
                     && t.last_detected < latest
                     && tracker.rejected_until(t.object).is_none()
-                    && (t.centre.z - feet.z).abs() <= 2.0
+                    && (t.centre.z - feet.z).abs() <= LOOK_HEIGHT_M
             })
             .map(|t| {
                 let d = (t.centre.xy() - feet.xy()).norm();

@@ -345,6 +345,22 @@ mod tests {
         map.level_map(LevelId(0)).unwrap().grid()
     }
 
+    /// The approach target of `object` on `voxels` seen by the level camera,
+    /// with a 0.3 m arrival radius.
+    fn target_of<'a>(
+        object: &'a ObjectView,
+        voxels: &'a SemanticMap,
+        demand: ViewDemand,
+    ) -> ApproachTarget<'a> {
+        ApproachTarget {
+            object,
+            voxels,
+            viewer: LEVEL,
+            arrival_radius_m: 0.3,
+            demand,
+        }
+    }
+
     /// Brute force over the lattice: the shortest path from `robot` to a
     /// sample within the standoff that `keep` accepts.
     fn brute_force(
@@ -407,13 +423,7 @@ mod tests {
             let robot = Point3::origin();
             let config = ApproachConfig { line_of_sight: false, ..ApproachConfig::default() };
             let unlimited = ApproachConfig { max_path_queries: usize::MAX, ..config };
-            let target = ApproachTarget {
-                object: &view,
-                voxels: &voxels,
-                viewer: LEVEL,
-                arrival_radius_m: 0.3,
-                demand: ViewDemand::Prefer,
-            };
+            let target = target_of(&view, &voxels, ViewDemand::Prefer);
             let limited = approach_waypoint(&mut map, robot, LevelId(0), &target, &config).unwrap();
             let best = approach_waypoint(&mut map, robot, LevelId(0), &target, &unlimited).unwrap();
             let (Some((p, path)), Some((q, _))) = (limited, best) else {
@@ -553,13 +563,7 @@ mod tests {
             max_reach_m: 0.01,
             ..ApproachConfig::default()
         };
-        let target = ApproachTarget {
-            object: &view,
-            voxels: &voxels,
-            viewer: LEVEL,
-            arrival_radius_m: 0.3,
-            demand: ViewDemand::Require,
-        };
+        let target = target_of(&view, &voxels, ViewDemand::Require);
         let robot = Point3::origin();
         let required = approach_waypoint(&mut map, robot, LevelId(0), &target, &config).unwrap();
         assert!(required.is_none());
@@ -596,13 +600,7 @@ mod tests {
         }
         let (voxels, keys) = voxel_map(&[solid(2.2, -0.15, 0.3, 2.5, 0.15, 0.7)]);
         let view = ObjectView::new(&keys[0], voxels.resolution()).unwrap();
-        let target = ApproachTarget {
-            object: &view,
-            voxels: &voxels,
-            viewer: LEVEL,
-            arrival_radius_m: 0.3,
-            demand: ViewDemand::Prefer,
-        };
+        let target = target_of(&view, &voxels, ViewDemand::Prefer);
         let g = grid(&map);
         let gap = Point2::new(1.6, -0.03);
         assert!(
