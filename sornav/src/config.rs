@@ -294,7 +294,9 @@ pub struct AgentConfig {
     pub cluster: ClusterConfig,
     /// Target gate (N_min, N_obs, N_miss, verification).
     pub gate: GateConfig,
-    /// Receding-horizon TSP and the replacement rule.
+    /// Receding-horizon TSP, the replacement rule and the route's
+    /// objective (`objective`: the paper's path length, or the latency,
+    /// see [`sornav_tsp::RouteObjective`]).
     pub horizon: RecedingHorizon,
     /// Frontier ordering.
     pub ordering: FrontierOrdering,

@@ -67,12 +67,14 @@ pub struct Route {
     pub committed: bool,
 }
 
-/// A reachable, admissible frontier: id, viewpoint, centroid, robot cost.
+/// A reachable, admissible frontier: id, viewpoint, centroid, robot cost
+/// and its worth for the latency objective ([`frontier_weights`]).
 struct Reachable {
     id: FrontierId,
     viewpoint: Point3<f64>,
     centroid: Point2<f64>,
     cost: f64,
+    weight: f64,
 }
 
 fn reachable(graph: &FrontierGraph, excluded: &BTreeSet<FrontierId>) -> Vec<Reachable> {
@@ -86,9 +88,27 @@ fn reachable(graph: &FrontierGraph, excluded: &BTreeSet<FrontierId>) -> Vec<Reac
                 viewpoint: f.viewpoint3(),
                 centroid: f.centroid,
                 cost,
+                weight: f.cells.len() as f64,
             })
         })
         .collect()
+}
+
+/// The latency objective's weights: a frontier is worth the unknown area
+/// it opens, taken proportional to its length (its cell count); the open
+/// end of a stair opens a floor nobody has seen, taken as worth as much as
+/// all the other reachable frontiers together (at least 1). Read only by
+/// [`sornav_tsp::RouteObjective::Latency`]. `O(n)`.
+fn frontier_weights(cands: &mut [Reachable]) {
+    let is_stair = |c: &Reachable| c.id.0 >= sornav_frontier_graph::STAIR_FRONTIER_BASE;
+    let floor: f64 = cands
+        .iter()
+        .filter(|c| !is_stair(c))
+        .map(|c| c.weight)
+        .sum();
+    for c in cands.iter_mut().filter(|c| is_stair(c)) {
+        c.weight = floor.max(1.0);
+    }
 }
 
 /// G_F's cost between nodes `a` and `b` whose costs from the robot are
@@ -125,7 +145,8 @@ pub(crate) fn choose(
     input: &OrderingInput<'_>,
     previous: &mut Option<HorizonPlan<FrontierId>>,
 ) -> Result<Option<Route>, AgentError> {
-    let cands = reachable(input.graph, input.excluded);
+    let mut cands = reachable(input.graph, input.excluded);
+    frontier_weights(&mut cands);
     if cands.is_empty() {
         *previous = None;
         return Ok(None);
@@ -169,6 +190,7 @@ fn tsp(
             .map(|c| HorizonFrontier {
                 id: c.id,
                 position: c.viewpoint,
+                weight: c.weight,
             })
             .collect(),
         costs,
@@ -325,6 +347,30 @@ pub(crate) mod tests {
             }
         }
         out
+    }
+
+    #[test]
+    fn a_stair_frontier_weighs_as_much_as_the_floor() {
+        let stair = FrontierId(sornav_frontier_graph::STAIR_FRONTIER_BASE + 7);
+        let mk = |id: FrontierId, cells: f64| Reachable {
+            id,
+            viewpoint: Point3::origin(),
+            centroid: Point2::origin(),
+            cost: 1.0,
+            weight: cells,
+        };
+        let mut cands = vec![
+            mk(FrontierId(1), 12.0),
+            mk(stair, 3.0),
+            mk(FrontierId(2), 5.0),
+        ];
+        frontier_weights(&mut cands);
+        let w: Vec<f64> = cands.iter().map(|c| c.weight).collect();
+        assert_eq!(w, vec![12.0, 17.0, 5.0]);
+        // Alone, a stair frontier still weighs 1.
+        let mut only = vec![mk(stair, 0.0)];
+        frontier_weights(&mut only);
+        assert_eq!(only[0].weight, 1.0);
     }
 
     proptest! {

@@ -241,11 +241,19 @@ fn several_targets_in_a_row_keep_the_maps() {
 #[test]
 fn every_agent_variant_finds_the_target() {
     let world = two_rooms();
-    for variant in sornav::Variant::ALL {
-        let Ok(config) = AgentConfig::for_variant(variant) else {
+    let objectives = [
+        sornav::tsp::RouteObjective::PathLength,
+        sornav::tsp::RouteObjective::Latency,
+    ];
+    for (variant, objective) in sornav::Variant::ALL
+        .into_iter()
+        .flat_map(|v| objectives.map(|o| (v, o)))
+    {
+        let Ok(mut config) = AgentConfig::for_variant(variant) else {
             assert_eq!(variant, sornav::Variant::Oracle);
             continue;
         };
+        config.horizon.objective = objective;
         let mut agent = Agent::new(config).unwrap();
         agent.set_target("television").unwrap();
         let mut robot = Robot::new(3.5, 1.5);

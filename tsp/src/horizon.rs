@@ -18,8 +18,9 @@ use serde::{Deserialize, Serialize};
 
 use crate::construct::cheapest_insertion;
 use crate::error::TspError;
+use crate::latency::min_weighted_latency_path;
 use crate::matrix::CostMatrix;
-use crate::solver::{Method, Solver, SolverConfig};
+use crate::solver::{Method, Solver, SolverConfig, Tour};
 
 /// The replacement rule's two parameters.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -87,6 +88,16 @@ pub struct HorizonFrontier<Id> {
     /// Position (metres). Informational (reports, drawings): the planner
     /// reads only the cost matrix, the replacement rule included.
     pub position: Point3<f64>,
+    /// How much the frontier is worth reaching early: read only by
+    /// [`RouteObjective::Latency`], where each arrival cost counts this
+    /// many times (for example the unknown area the frontier opens, or 1
+    /// for every frontier alike). Finite and `>= 0`; default 1.
+    #[serde(default = "unit_weight")]
+    pub weight: f64,
+}
+
+fn unit_weight() -> f64 {
+    1.0
 }
 
 /// One planning request: robot, frontiers and the costs between them.
@@ -139,7 +150,7 @@ pub struct HorizonPlan<Id> {
 /// let problem = HorizonProblem {
 ///     robot: Point3::origin(),
 ///     frontiers: (1..4)
-///         .map(|i| HorizonFrontier { id: i as u32, position: Point3::new(xs[i], 0.0, 0.0) })
+///         .map(|i| HorizonFrontier { id: i as u32, position: Point3::new(xs[i], 0.0, 0.0), weight: 1.0 })
 ///         .collect(),
 ///     costs: CostMatrix::from_fn(4, |i, j| (xs[i] - xs[j]).abs())?,
 ///     home: false,
@@ -157,6 +168,23 @@ pub struct RecedingHorizon {
     pub rule: ReplacementRule,
     /// Solver settings.
     pub solver: SolverConfig,
+    /// What the route minimises (default: its length, the paper's TSP).
+    pub objective: RouteObjective,
+}
+
+/// What the receding-horizon route minimises.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RouteObjective {
+    /// The route's length: the open-path ATSP (SOR-Nav's and FUEL's
+    /// coverage ordering).
+    #[default]
+    PathLength,
+    /// The sum of the costs at which each frontier is reached
+    /// ([`min_latency_path`](crate::min_latency_path)): the expected cost
+    /// of reaching the frontier the target is behind, each frontier being
+    /// equally likely. Needs a free end (`home = false`).
+    Latency,
 }
 
 impl RecedingHorizon {
@@ -199,6 +227,12 @@ impl RecedingHorizon {
                 )));
             }
             let p = f.position;
+            if !(f.weight.is_finite() && f.weight >= 0.0) {
+                return Err(TspError::InconsistentProblem(format!(
+                    "frontier {i} has weight {}, not finite and >= 0",
+                    f.weight
+                )));
+            }
             if !(p.x.is_finite() && p.y.is_finite() && p.z.is_finite()) {
                 return Err(TspError::InconsistentProblem(format!(
                     "frontier {i} has a non-finite position"
@@ -215,12 +249,35 @@ impl RecedingHorizon {
             return Ok(None);
         }
         let end = problem.home.then_some(n - 1);
-        let tour = match previous {
-            Some(prev) => {
-                let initial = self.warm_start(problem, prev, &index, end);
-                solver.open_path_from(&problem.costs, 0, end, &initial)?
+        let initial = previous.map(|prev| self.warm_start(problem, prev, &index, end));
+        let tour = match (self.objective, &initial) {
+            (RouteObjective::Latency, _) if problem.home => {
+                return Err(TspError::InvalidConfig(
+                    "the latency objective needs a free end (home = false)".into(),
+                ));
             }
-            None => solver.open_path(&problem.costs, 0, end)?,
+            (RouteObjective::Latency, initial) => {
+                let weights: Vec<f64> = std::iter::once(0.0)
+                    .chain(problem.frontiers.iter().map(|f| f.weight))
+                    .collect();
+                let path = min_weighted_latency_path(
+                    &problem.costs,
+                    0,
+                    &weights,
+                    initial.as_deref(),
+                    self.solver.exact_max_nodes,
+                )?;
+                Tour {
+                    order: path.order,
+                    cost: path.cost,
+                    closed: false,
+                    method: path.method,
+                }
+            }
+            (RouteObjective::PathLength, Some(initial)) => {
+                solver.open_path_from(&problem.costs, 0, end, initial)?
+            }
+            (RouteObjective::PathLength, None) => solver.open_path(&problem.costs, 0, end)?,
         };
         let order: Vec<Id> = tour
             .order

@@ -25,6 +25,11 @@
 //!   first planned leg is more than twice as long), warm start from the
 //!   previous plan. It takes plain data ([`HorizonProblem`]), not a graph
 //!   type.
+//! * [`min_latency_path`]: the minimum-latency open path (travelling
+//!   repairman: least sum of arrival costs), exact up to 13 nodes, local
+//!   search above; [`RouteObjective::Latency`] plans the receding horizon
+//!   with it, for a search that wants every frontier reached early rather
+//!   than all of them covered cheaply.
 //! * [`tsplib`]: TSPLIB95 problems and tours, to check the solver on
 //!   instances with proven optima.
 //!
@@ -62,6 +67,7 @@ mod construct;
 mod error;
 mod held_karp;
 mod horizon;
+mod latency;
 mod local_search;
 mod matrix;
 mod solver;
@@ -71,7 +77,13 @@ pub mod tsplib;
 
 pub use error::TspError;
 pub use held_karp::HELD_KARP_MAX_NODES;
-pub use horizon::{HorizonFrontier, HorizonPlan, HorizonProblem, RecedingHorizon, ReplacementRule};
+pub use horizon::{
+    HorizonFrontier, HorizonPlan, HorizonProblem, RecedingHorizon, ReplacementRule, RouteObjective,
+};
+pub use latency::{
+    LATENCY_EXACT_MAX_NODES, LATENCY_MAX_PASSES, LatencyPath, latency, min_latency_path,
+    min_weighted_latency_path, weighted_latency,
+};
 pub use matrix::{CostMatrix, MAX_ABS_COST};
 pub use solver::{
     MAX_KICKS_PER_NODE, MAX_KICKS_PER_PAIR, MAX_TIME_BUDGET, Method, Solver, SolverConfig, Tour,

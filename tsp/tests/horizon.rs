@@ -69,6 +69,7 @@ fn line_problem(xs: &[f64], robot_detour: &[f64], home: bool) -> HorizonProblem<
             .map(|(i, &x)| HorizonFrontier {
                 id: 100 + i as u32,
                 position: Point3::new(x, 0.0, 0.0),
+                weight: 1.0,
             })
             .collect(),
         costs: CostMatrix::from_fn(n, |i, j| {
@@ -257,6 +258,7 @@ fn two_floor_problem(
             .map(|(i, &(x, y, floor))| HorizonFrontier {
                 id: 100 + i as u32,
                 position: Point3::new(x, y, 3.0 * f64::from(floor)),
+                weight: 1.0,
             })
             .collect(),
         costs: CostMatrix::from_fn(nodes.len(), |i, j| {
@@ -381,4 +383,74 @@ proptest! {
         }
         prop_assert_eq!(planner.plan(&stacked, None).unwrap().unwrap(), plan);
     }
+}
+
+/// The latency objective: the plan's order is the minimum weighted
+/// latency path of the same matrix and weights, it needs a free end, and
+/// a bad weight is a typed error.
+#[test]
+fn latency_objective_plans_the_weighted_latency_path() {
+    use sornav_tsp::{RouteObjective, min_weighted_latency_path};
+    // Robot at 0, one frontier at -1 (heavy), a cluster at 1.5 .. 3.
+    let xs = [0.0, -1.0, 1.5, 2.0, 2.5, 3.0];
+    let make = |heavy: f64| HorizonProblem {
+        robot: Point3::origin(),
+        frontiers: (1..xs.len())
+            .map(|i| HorizonFrontier {
+                id: i as u32,
+                position: Point3::new(xs[i], 0.0, 0.0),
+                weight: if i == 1 { heavy } else { 1.0 },
+            })
+            .collect(),
+        costs: CostMatrix::from_fn(xs.len(), |i, j| (xs[i] - xs[j]).abs()).unwrap(),
+        home: false,
+    };
+    let horizon = RecedingHorizon {
+        objective: RouteObjective::Latency,
+        ..RecedingHorizon::default()
+    };
+    for (heavy, first) in [(1.0, 2), (10.0, 1)] {
+        let problem = make(heavy);
+        let plan = horizon.plan(&problem, None).unwrap().unwrap();
+        let weights: Vec<f64> = std::iter::once(0.0)
+            .chain(problem.frontiers.iter().map(|f| f.weight))
+            .collect();
+        let path = min_weighted_latency_path(&problem.costs, 0, &weights, None, 13).unwrap();
+        let ids: Vec<u32> = path.order[1..].iter().map(|&v| v as u32).collect();
+        assert_eq!(plan.order, ids);
+        assert_eq!(plan.first, first, "heavy weight {heavy}");
+        assert!((plan.route_cost - path.cost).abs() < 1e-12);
+        // Warm-started from its own plan, the answer is the same.
+        let again = horizon.plan(&problem, Some(&plan)).unwrap().unwrap();
+        assert_eq!(again.order, plan.order);
+    }
+    // The path-length objective ignores the weights.
+    let shortest = RecedingHorizon::default()
+        .plan(&make(10.0), None)
+        .unwrap()
+        .unwrap();
+    assert_eq!(
+        shortest,
+        RecedingHorizon::default()
+            .plan(&make(1.0), None)
+            .unwrap()
+            .unwrap()
+    );
+    let mut bad = make(1.0);
+    bad.frontiers[2].weight = f64::NAN;
+    assert!(matches!(
+        horizon.plan(&bad, None),
+        Err(TspError::InconsistentProblem(_))
+    ));
+    let mut home = make(1.0);
+    home.home = true;
+    home.costs = CostMatrix::from_fn(xs.len() + 1, |i, j| {
+        let x = |k: usize| if k == xs.len() { 0.0 } else { xs[k] };
+        (x(i) - x(j)).abs()
+    })
+    .unwrap();
+    assert!(matches!(
+        horizon.plan(&home, None),
+        Err(TspError::InvalidConfig(_))
+    ));
 }
