@@ -232,12 +232,20 @@ pub(crate) fn approach_waypoint(
         .ceil()
         .clamp(0.0, 4000.0) as usize;
     let grid = level_map.grid();
+    // The sight lattice extends the samples by the arrival disc's margin
+    // `m`; samples are computed from its origin so that a sample and its
+    // lattice pose are the same point to the bit.
+    let (disc, m) = lattice_disc(step, arrival_radius_m);
+    let origin = Point2::new(
+        lo.x - reach - m as f64 * step,
+        lo.y - reach - m as f64 * step,
+    );
     let mut samples = Vec::new();
     for i in 0..=nx {
         for j in 0..=ny {
             let p = Point2::new(
-                lo.x - reach + i as f64 * step,
-                lo.y - reach + j as f64 * step,
+                origin.x + (i + m) as f64 * step,
+                origin.y + (j + m) as f64 * step,
             );
             let d = distance_to_box(&p, &lo, &hi);
             let extended = d > window;
@@ -256,11 +264,6 @@ pub(crate) fn approach_waypoint(
     if config.line_of_sight || demand != ViewDemand::Prefer {
         let rule = config.view_rule();
         let margin = rule.max_reach_m - arrival_radius_m.max(0.0);
-        let (disc, m) = lattice_disc(step, arrival_radius_m);
-        let origin = Point2::new(
-            lo.x - reach - m as f64 * step,
-            lo.y - reach - m as f64 * step,
-        );
         let mut lattice = SightLattice {
             map,
             grid,
@@ -363,6 +366,18 @@ mod tests {
 
     /// Brute force over the lattice: the shortest path from `robot` to a
     /// sample within the standoff that `keep` accepts.
+    /// The lattice's origin (see [`approach_waypoint`]): the samples'
+    /// first corner less the margin of the 0.3 m arrival disc.
+    fn lattice_origin(lo: &Point2<f64>, config: &ApproachConfig) -> Point2<f64> {
+        let step = config.sample_step_m;
+        let window = config.standoff_m;
+        let extra = ((config.roomy_standoff_m - window) / step).ceil().max(0.0);
+        let reach = window + extra * step;
+        let m = lattice_disc(step, 0.3).1 as f64;
+        // As approach_waypoint computes it, operation for operation.
+        Point2::new(lo.x - reach - m * step, lo.y - reach - m * step)
+    }
+
     fn brute_force(
         map: &mut MultiLevelMap,
         robot: Point3<f64>,
@@ -374,14 +389,16 @@ mod tests {
         let window = config.standoff_m;
         let extra = ((config.roomy_standoff_m - window) / step).ceil().max(0.0);
         let reach = window + extra * step;
+        let m = lattice_disc(step, 0.3).1;
+        let origin = lattice_origin(&lo, config);
         let mut brute = f64::INFINITY;
         let nx = ((hi.x - lo.x + 2.0 * reach) / step).ceil() as usize;
         let ny = ((hi.y - lo.y + 2.0 * reach) / step).ceil() as usize;
         for i in 0..=nx {
             for j in 0..=ny {
                 let s = Point2::new(
-                    lo.x - reach + i as f64 * step,
-                    lo.y - reach + j as f64 * step,
+                    origin.x + (i + m) as f64 * step,
+                    origin.y + (j + m) as f64 * step,
                 );
                 let d = distance_to_box(&s, &lo, &hi);
                 let extended = d > window;
@@ -477,14 +494,20 @@ mod tests {
             // Settled: every traversable pose of the sample lattice within
             // the arrival radius is clear too (the room has no raised
             // surface).
+            // Neighbours are computed as the lattice computes its poses
+            // (origin + index * step), so that a sight ray grazing a voxel
+            // edge is judged at the same point.
+            let origin = lattice_origin(&lo, &config);
             let settled = |p: &Point3<f64>| {
                 let r = (arrival / config.sample_step_m).floor() as i32;
+                let index = |c: f64, o: f64| ((c - o) / config.sample_step_m).round() as i32;
+                let (pi, pj) = (index(p.x, origin.x), index(p.y, origin.y));
                 (-r..=r).all(|di| {
                     (-r..=r).all(|dj| {
                         let (a, b) = (f64::from(di), f64::from(dj));
                         let q = Point3::new(
-                            p.x + a * config.sample_step_m,
-                            p.y + b * config.sample_step_m,
+                            origin.x + f64::from(pi + di) * config.sample_step_m,
+                            origin.y + f64::from(pj + dj) * config.sample_step_m,
                             p.z,
                         );
                         (a * a + b * b).sqrt() * config.sample_step_m > arrival + 1e-9

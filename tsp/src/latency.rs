@@ -92,9 +92,10 @@ pub fn weighted_latency(m: &CostMatrix, order: &[usize], weights: &[f64]) -> Res
 ///
 /// Instances of at most `exact_max_nodes` nodes (and never more than
 /// [`LATENCY_EXACT_MAX_NODES`]) are solved exactly by dynamic programming
-/// over subsets: with `S` the visited set (start included) the next arc
-/// counts `n - |S|` times, so `D[S][j] = min_i D[S \ {j}][i] + (n - |S| +
-/// 1) c(i, j)`. Larger ones start from the better of nearest neighbour and
+/// over subsets: the arc into `j` after visiting the set `S` (start
+/// included) counts `n - |S|` times, once for `j` and for every node after
+/// it, so `D[S + j][j] = min_i D[S][i] + (n - |S|) c(i, j)`. Larger ones
+/// start from the better of nearest neighbour and
 /// `initial` (a permutation starting at `start`, e.g. the previous plan)
 /// and descend with first-improvement moves until none improves by more
 /// than a relative `1e-12`: moving a stretch of one to three nodes
@@ -197,7 +198,7 @@ fn solve(
     }
     let relabelled: Option<Vec<f64>> = weights.map(|w| nodes.iter().map(|&v| w[v]).collect());
     let w = relabelled.as_deref();
-    let (order, method) = if n <= exact_max_nodes.min(LATENCY_EXACT_MAX_NODES).max(2) {
+    let (order, method) = if n <= exact_max_nodes.clamp(2, LATENCY_EXACT_MAX_NODES) {
         (exact(&c, n, w), Method::Exact)
     } else {
         let mut relabel = vec![0; n];
