@@ -146,13 +146,15 @@ pub(crate) fn choose(
     previous: &mut Option<HorizonPlan<FrontierId>>,
 ) -> Result<Option<Route>, AgentError> {
     let mut cands = reachable(input.graph, input.excluded);
-    frontier_weights(&mut cands);
     if cands.is_empty() {
         *previous = None;
         return Ok(None);
     }
     let route = match ordering {
-        FrontierOrdering::Tsp => tsp(horizon, input, &cands, previous)?,
+        FrontierOrdering::Tsp => {
+            frontier_weights(&mut cands);
+            tsp(horizon, input, &cands, previous)?
+        }
         FrontierOrdering::Nearest => nearest(&cands),
         FrontierOrdering::SemanticRanking(weights) => semantic(weights, input, &cands),
     };

@@ -67,8 +67,16 @@ pub(crate) fn solve_closed(c: &[f64], m: usize) -> (Vec<usize>, f64) {
             last = j;
         }
     }
-    let mut order = Vec::with_capacity(m);
-    let mut mask = full;
+    (backtrack(&parent, k, last), best)
+}
+
+/// The order of a subset DP over nodes `1..=k` (bit `j` = node `j + 1`)
+/// from node 0: `parent[mask * k + j]` is the node visited before `j` in
+/// the best path over `mask` ending at `j` (`u8::MAX` for the first), and
+/// `last` ends the best path over all of them. Node 0 first.
+pub(crate) fn backtrack(parent: &[u8], k: usize, last: usize) -> Vec<usize> {
+    let mut order = Vec::with_capacity(k + 1);
+    let mut mask = (1usize << k) - 1;
     let mut j = last;
     loop {
         order.push(j + 1);
@@ -77,9 +85,9 @@ pub(crate) fn solve_closed(c: &[f64], m: usize) -> (Vec<usize>, f64) {
         if p == u8::MAX {
             break;
         }
-        j = p as usize;
+        j = usize::from(p);
     }
     order.push(0);
     order.reverse();
-    (order, best)
+    order
 }

@@ -16,6 +16,7 @@
 
 use crate::construct::nearest_neighbour;
 use crate::error::TspError;
+use crate::held_karp::backtrack;
 use crate::matrix::CostMatrix;
 use crate::solver::Method;
 
@@ -311,20 +312,7 @@ fn exact(c: &[f64], n: usize, weights: Option<&[f64]>) -> Vec<usize> {
                 .then(a.cmp(&b))
         })
         .unwrap_or(0);
-    let mut order = Vec::with_capacity(n);
-    let (mut mask, mut j) = (full, last);
-    loop {
-        order.push(j + 1);
-        let p = parent[mask * k + j];
-        mask &= !(1 << j);
-        if p == u8::MAX {
-            break;
-        }
-        j = usize::from(p);
-    }
-    order.push(0);
-    order.reverse();
-    order
+    backtrack(&parent, k, last)
 }
 
 /// First-improvement descent on `order` (node 0 first and fixed): Or-opt
