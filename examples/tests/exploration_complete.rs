@@ -55,7 +55,7 @@ use common::simulator_160x120;
 use nalgebra::{Point2, Point3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-use sornav::frontier_graph::{CellState, LevelId};
+use sornav::frontier_graph::{CellState, LevelId, NodeId, OccupancyGrid};
 use sornav::{Agent, AgentError, LabelEntry};
 use sornav_examples::adapter::{
     AdapterConfig, AgentFactory, ConfigFactory, EpisodeTrace, SornavPolicy, sim_agent_config,
@@ -388,7 +388,8 @@ fn explore(sim: &Simulator, name: &str, start: &Start) -> HomeResult {
     }
     components.sort_by(|a, b| b.area_m2.total_cmp(&a.area_m2));
     if std::env::var_os("SORNAV_EC_DUMP").is_some()
-        && (trace.agent_end != "exhausted"
+        && (std::env::var_os("SORNAV_EC_TRACE").is_some()
+            || trace.agent_end != "exhausted"
             || components
                 .first()
                 .is_some_and(|c| c.area_m2 > MAX_UNKNOWN_M2))
@@ -405,6 +406,68 @@ fn explore(sim: &Simulator, name: &str, start: &Start) -> HomeResult {
         known_share: 1.0 - n_unknown as f64 / reachable.len().max(1) as f64,
         unknown: components,
         wall_s: t0.elapsed().as_secs_f64(),
+    }
+}
+
+/// The trace of a run (`SORNAV_EC_TRACE`): the start floor's grid at its
+/// resolution 4 m around `centre` (`R`/`F` traversable / frontier cells
+/// connected to the robot's cell by straight moves, `t`/`f` the same not
+/// connected, `.` free, `#` occupied, blank unknown), then the trajectory
+/// every 10 actions and every decision.
+fn trace_dump(agent: &Agent, trace: &EpisodeTrace, grid: &OccupancyGrid, centre: &Point2<f64>) {
+    let last = trace.trajectory.last().copied().unwrap_or_default();
+    let robot = Point2::new(f64::from(last[0]), f64::from(last[1]));
+    let mut connected = std::collections::HashSet::new();
+    if let Ok(start) = grid.cell_of(&robot) {
+        let mut queue = vec![start];
+        connected.insert(start);
+        while let Some(c) = queue.pop() {
+            for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+                let n = c.offset(dx, dy);
+                if grid.is_traversable(n) && connected.insert(n) {
+                    queue.push(n);
+                }
+            }
+        }
+    }
+    let frontier: std::collections::HashSet<_> = agent
+        .frontier_map()
+        .level_map(LevelId(0))
+        .map(|m| m.frontier_cells().collect())
+        .unwrap_or_default();
+    let r = grid.resolution();
+    let n = (4.0 / r).round() as i32;
+    eprintln!(
+        "  start floor's grid, {r} m per character, 4 m around ({:.2}, {:.2}), y down the page; robot at ({:.2}, {:.2})",
+        centre.x, centre.y, robot.x, robot.y
+    );
+    for dy in (-n..=n).rev() {
+        let row: String = (-n..=n)
+            .map(|dx| {
+                let q = Point2::new(centre.x + r * f64::from(dx), centre.y + r * f64::from(dy));
+                let Ok(c) = grid.cell_of(&q) else {
+                    return '?';
+                };
+                match (frontier.contains(&c), connected.contains(&c)) {
+                    (true, true) => 'F',
+                    (true, false) => 'f',
+                    (false, true) => 'R',
+                    (false, false) if grid.is_traversable(c) => 't',
+                    _ => match grid.state(c) {
+                        CellState::Occupied => '#',
+                        CellState::Free => '.',
+                        CellState::Unknown => ' ',
+                    },
+                }
+            })
+            .collect();
+        eprintln!("  |{row}|");
+    }
+    for (i, t) in trace.trajectory.iter().enumerate().step_by(10) {
+        eprintln!("  action {i}: ({:.2}, {:.2}, {:.2})", t[0], t[1], t[2]);
+    }
+    for d in trace.decisions.runs() {
+        eprintln!("  {d:?}");
     }
 }
 
@@ -456,6 +519,20 @@ fn dump(
             lm.graph().len(),
             lm.frontier_cells().count()
         );
+        if std::env::var_os("SORNAV_EC_TRACE").is_some() {
+            for f in lm.graph().nodes() {
+                let cost = lm.graph().cost(NodeId::Robot, NodeId::Frontier(f.id));
+                eprintln!(
+                    "    frontier {:?}: centroid ({:.2}, {:.2}), viewpoint ({:.2}, {:.2}), {} cells, cost from the robot {cost:?}",
+                    f.id,
+                    f.centroid.x,
+                    f.centroid.y,
+                    f.viewpoint.x,
+                    f.viewpoint.y,
+                    f.cells.len(),
+                );
+            }
+        }
     }
     let runs = trace.decisions.runs();
     for d in runs
@@ -477,6 +554,9 @@ fn dump(
         .map_or(Point2::new(f64::from(last[0]), f64::from(last[1])), |c| {
             c.centroid
         });
+    if std::env::var_os("SORNAV_EC_TRACE").is_some() {
+        trace_dump(agent, trace, grid, &centre);
+    }
     let reach: std::collections::HashSet<(usize, usize)> =
         reachable.iter().map(|&s| nav.span_cell(s)).collect();
     eprintln!(
@@ -698,7 +778,10 @@ fn exploration_leaves_no_reachable_unknown_area() {
 /// (`frontier.levels.allow_stairs = false`), `SORNAV_EC_DUMP=1` prints,
 /// for a failing run, the end pose, the agent's levels, stairs, frontiers
 /// and last decisions and an 8 m map of the agent's grid against the
-/// ground truth around the largest unknown component; `SORNAV_DEBUG=1` /
+/// ground truth around the largest unknown component (`SORNAV_EC_TRACE=1`
+/// as well: for every run, with each frontier's cost from the robot, the
+/// start floor's grid at its resolution, the trajectory and every
+/// decision); `SORNAV_DEBUG=1` /
 /// `SORNAV_DEBUG_ACTIONS=1` log dispatches / actions.
 #[test]
 #[ignore = "known failures of today's agent (none since 2026-11-29); a diagnostic run"]

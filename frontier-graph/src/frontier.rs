@@ -26,6 +26,26 @@ pub fn is_frontier_cell(grid: &OccupancyGrid, cell: Cell) -> bool {
             .any(|&(dx, dy)| grid.state(cell.offset(dx, dy)) == CellState::Unknown)
 }
 
+/// Whether the frontier cells `a` and `a + (dx, dy)` (8-neighbours) belong
+/// to one segment: a straight neighbour always; a diagonal one when either
+/// side cell is traversable, so that the robot walks from one to the other
+/// in two straight moves. Two frontier cells that touch only at a corner
+/// between a non-traversable cell and an unknown one (the jamb of a doorway
+/// seen from both sides, say) lie on different sides of the gap and may be
+/// in different traversable components: one segment over both could have its
+/// viewpoint on the side the robot cannot reach, and the reachable half
+/// would never be explored. Every segment therefore lies in one
+/// 4-connected traversable component.
+///
+/// # Complexity
+/// O(1).
+fn linked(grid: &OccupancyGrid, a: Cell, dx: i32, dy: i32) -> bool {
+    dx == 0
+        || dy == 0
+        || grid.is_traversable(a.offset(dx, 0))
+        || grid.is_traversable(a.offset(0, dy))
+}
+
 /// Node ids created and removed by one frontier update.
 #[derive(Debug, Default, Clone)]
 pub(crate) struct FrontierChanges {
@@ -61,7 +81,18 @@ impl Detector<'_> {
         dirty.extend(delta.lost.iter().copied());
         let mut dirty: Vec<Cell> = dirty.into_iter().collect();
         dirty.sort_unstable();
-        self.retest(&dirty)
+        // A cell whose traversability changed can link or unlink the
+        // diagonal frontier cells around it (see `linked`): their segments
+        // are re-segmented even when no frontier flag changes.
+        let mut relink: Vec<Cell> = delta
+            .gained
+            .iter()
+            .chain(&delta.lost)
+            .flat_map(|c| N8.iter().map(move |&(dx, dy)| c.offset(dx, dy)))
+            .collect();
+        relink.sort_unstable();
+        relink.dedup();
+        self.retest_with(&dirty, &relink, FxHashMap::default(), Vec::new())
     }
 
     /// Recomputes everything from scratch (fresh ids for all segments that
@@ -88,18 +119,18 @@ impl Detector<'_> {
             removed.push(id);
             stash.insert(node.cells, id);
         }
-        let mut ch = self.retest_with(&cells, stash, removed);
+        let mut ch = self.retest_with(&cells, &[], stash, removed);
         ch.added.sort_unstable();
         ch
     }
 
-    fn retest(&mut self, dirty: &[Cell]) -> FrontierChanges {
-        self.retest_with(dirty, FxHashMap::default(), Vec::new())
-    }
-
+    /// Re-tests the frontier flags of `dirty` and re-segments every
+    /// component touching a changed flag or a cell of `relink` (frontier
+    /// cells whose links may have changed).
     fn retest_with(
         &mut self,
         dirty: &[Cell],
+        relink: &[Cell],
         mut stash: FxHashMap<Vec<Cell>, FrontierId>,
         mut removed: Vec<FrontierId>,
     ) -> FrontierChanges {
@@ -129,6 +160,19 @@ impl Detector<'_> {
                 }
             }
         }
+        for &c in relink {
+            let Some(i) = self.grid.index(c) else {
+                continue;
+            };
+            if !self.grid.frontier[i] {
+                continue;
+            }
+            let s = self.grid.segment[i];
+            if s != 0 {
+                self.dissolve(FrontierId(s), &mut seeds, &mut stash, &mut removed);
+            }
+            seeds.push(c);
+        }
         // Re-segment every component reachable from the seeds.
         let mut visited: FxHashSet<Cell> = FxHashSet::default();
         let mut created: Vec<FrontierId> = Vec::new();
@@ -153,7 +197,7 @@ impl Detector<'_> {
                 }
                 for (dx, dy) in N8 {
                     let n = c.offset(dx, dy);
-                    if self.is_flagged(n) && visited.insert(n) {
+                    if self.is_flagged(n) && linked(self.grid, c, dx, dy) && visited.insert(n) {
                         comp.push(n);
                     }
                 }

@@ -71,8 +71,11 @@
 //!   incrementally maintained thresholded distance transform (obstacle count
 //!   within the robot disk).
 //! * Frontiers: after FUEL (Zhou et al., RA-L 2021): re-test only cells an
-//!   update touched, re-segment only affected 8-connected components, split
-//!   by PCA, keep ids of unchanged segments.
+//!   update touched, re-segment only affected components, split by PCA,
+//!   keep ids of unchanged segments. Components are 8-connected with one
+//!   rule FUEL does not need in free 3-D space: a diagonal pair belongs
+//!   together only when a side cell is traversable, so every segment lies
+//!   in one traversable component and its viewpoint reaches all of it.
 //! * Edges: exact 8-connected octile shortest paths without corner cutting,
 //!   by canonical Dijkstra (Sturtevant & Rabin 2016: only jump points are
 //!   queued, straight runs are labelled by scans) over exact integer labels

@@ -141,6 +141,21 @@ proptest! {
                 prop_assert!(reported.contains(c));
                 prop_assert!(seen.insert(*c), "cell in two nodes");
             }
+            // One traversable component (BFS over straight moves): the
+            // viewpoint reaches every cell of its segment.
+            let mut comp = BTreeSet::from([n.viewpoint_cell]);
+            let mut queue = vec![n.viewpoint_cell];
+            while let Some(c) = queue.pop() {
+                for (dx, dy) in [(1, 0), (-1, 0), (0, 1), (0, -1)] {
+                    let m = c.offset(dx, dy);
+                    if grid.is_traversable(m) && comp.insert(m) {
+                        queue.push(m);
+                    }
+                }
+            }
+            for c in &n.cells {
+                prop_assert!(comp.contains(c), "{:?}: cell {:?} not reachable from the viewpoint {:?}", n.id, c, n.viewpoint_cell);
+            }
         }
 
         // Edges vs reference Dijkstra; paths executable.

@@ -178,6 +178,12 @@ const RETREAT_MIN_M: f64 = 0.3;
 /// trail to the last floor it stood on.
 const LOOK_AROUND_LIMIT: u32 = 24;
 
+/// Walks back over a stair the robot crossed (see `Crossing`) per episode,
+/// attempts that end short of the floor (a collision at the stair's head)
+/// included: a pair of floors whose frontiers are each unreachable from
+/// the other cannot make the robot shuttle for ever.
+const CROSSING_BACK_LIMIT: u32 = 3;
+
 /// Spacing (m) of the trail's points and their largest number.
 const TRAIL_SPACING_M: f64 = 0.1;
 const TRAIL_MAX: usize = 10_000;
@@ -361,6 +367,12 @@ pub struct Agent {
     /// The robot walked back along its trail since it last stood on a
     /// known floor (a second time it is exhausted instead).
     walked_back: bool,
+    /// The floor the robot last stood on.
+    last_level: Option<LevelId>,
+    /// The last stair walked between two known floors.
+    crossing: Option<Crossing>,
+    /// Walks back over a crossing so far (see [`CROSSING_BACK_LIMIT`]).
+    crossings_back: u32,
     relocation: Option<RelocationRecord>,
     /// How the sensor sees (from the last depth or cloud frame).
     viewer: Option<Viewer>,
@@ -452,6 +464,22 @@ fn explore_mission(graph: &FrontierGraph, id: FrontierId) -> Option<Mission> {
 
 /// A mission to `back` that is no relocation of Algorithm 1 (a retreat, a
 /// look, a back-off): a relocation to no cluster.
+/// A stair the robot walked from one known floor to another: the trail
+/// from the floor it left to the first pose the new floor placed. The map
+/// may never close such a stair (its top out of sight, a landing the
+/// extraction does not attach), and then the floor left behind is
+/// unreachable in G_F although the robot has just walked from it: the
+/// crossing is the way back (see `Agent::cross_back`).
+#[derive(Debug, Clone)]
+struct Crossing {
+    /// The floor the robot left.
+    from: LevelId,
+    /// The floor it reached.
+    to: LevelId,
+    /// Positions from `from` to `to`.
+    path: Vec<Point3<f64>>,
+}
+
 fn retreat_mission(back: Point3<f64>) -> Mission {
     Mission::new(
         MissionKind::Relocate {
@@ -676,6 +704,9 @@ impl Agent {
             near_looks: 0,
             drop_look: None,
             walked_back: false,
+            last_level: None,
+            crossing: None,
+            crossings_back: 0,
             relocation: None,
             last_outcome: None,
             decisions: Vec::new(),
@@ -1371,7 +1402,20 @@ impl Agent {
         self.stats.steps += 1;
         self.executor.clock_mut().0 = now;
         self.back_off.record(pose.position);
-        if self.current_level().is_some() {
+        if let Some(level) = self.current_level() {
+            if let Some(from) = self.last_level
+                && from != level
+                && self.trail.len() > 1
+            {
+                let mut path = std::mem::take(&mut self.trail);
+                path.push(pose.position);
+                self.crossing = Some(Crossing {
+                    from,
+                    to: level,
+                    path,
+                });
+            }
+            self.last_level = Some(level);
             self.trail.clear();
             self.trail.push(pose.position);
             self.looking_around = 0;
@@ -1922,6 +1966,9 @@ impl Agent {
                             ),
                         }
                     }
+                    (None, None) if active.is_none() && self.crossing_back().is_some() => {
+                        self.cross_back(now, step, pose, &reason)?
+                    }
                     (None, None) if active.is_none() => {
                         self.decide(
                             now,
@@ -1946,6 +1993,67 @@ impl Agent {
             }
         };
         Ok(result)
+    }
+
+    /// The crossing to walk back over when the robot's floor is exhausted:
+    /// the last stair it walked, ending on this floor, while the floor it
+    /// left still has frontiers to explore (not excluded, stair ends
+    /// aside) and fewer than [`CROSSING_BACK_LIMIT`] walks back were made.
+    /// `O(F)` for the F frontiers of the floor left.
+    fn crossing_back(&self) -> Option<&Crossing> {
+        let crossing = self.crossing.as_ref()?;
+        let open = self.frontiers.level_map(crossing.from).is_some_and(|map| {
+            map.graph()
+                .nodes()
+                .any(|f| !self.excluded.contains(&f.id) && !self.frontiers.is_stair_frontier(f.id))
+        });
+        (self.crossings_back < CROSSING_BACK_LIMIT
+            && open
+            && self.current_level() == Some(crossing.to))
+        .then_some(crossing)
+    }
+
+    /// Walks the last crossing back to the floor it left (see
+    /// [`Crossing`]): on this floor to where the crossing ended (a path on
+    /// the map), then the crossing reversed, onto the floor itself (the
+    /// arrival radius of a back-off), where that floor's frontiers are
+    /// reachable again. Without a path to the crossing's end the crossing
+    /// is dropped (the next decision declares the floor exhausted).
+    fn cross_back(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        pose: &RobotPose,
+        reason: &str,
+    ) -> Result<AgentCommand, AgentError> {
+        let Some(crossing) = self.crossing.clone() else {
+            return Ok(self.keep_going(now, step, reason.to_owned()));
+        };
+        let (Some(&back), Some(&end)) = (crossing.path.first(), crossing.path.last()) else {
+            return Ok(self.keep_going(now, step, reason.to_owned()));
+        };
+        let Some(mut path) = self.plan_path(&pose.position, &end)? else {
+            self.crossing = None;
+            return Ok(self.keep_going(
+                now,
+                step,
+                format!("no path back to the stair the robot came by ({reason})"),
+            ));
+        };
+        self.crossings_back += 1;
+        path.extend(crossing.path.iter().rev().skip(1).copied());
+        let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
+        self.dispatch_as(
+            now,
+            step,
+            mission,
+            path,
+            DecisionAction::Retreat,
+            format!(
+                "floor {} exhausted, floor {} still has frontiers the map gives no way to: back over the stair the robot came by ({reason})",
+                crossing.to.0, crossing.from.0
+            ),
+        )
     }
 
     /// Whether the exhaustion check may still look at an unreached
@@ -2383,13 +2491,22 @@ impl Agent {
         match self.trail.first().copied() {
             Some(back) if !self.walked_back && (back - pose.position).norm() > RETREAT_MIN_M => {
                 self.walked_back = true;
+                // The place that last gave the robot somewhere to go is
+                // where it found nothing (the excluded stair end it
+                // climbed to): going back there would undo this walk.
+                self.last_placed = None;
                 let mut path = vec![pose.position];
                 path.extend(self.trail.iter().rev().copied());
-                self.retreat(
+                // Onto the floor itself: within a relocation's radius of
+                // the trail's start the robot may still stand on the stair,
+                // where no floor's frontiers are reachable.
+                let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
+                self.dispatch_as(
                     now,
                     step,
+                    mission,
                     path,
-                    None,
+                    DecisionAction::Retreat,
                     format!("nothing reachable off a known floor after looking around: back along the trail to the last floor ({reason})"),
                 )
             }
