@@ -87,7 +87,11 @@ fn real_model_recording_replays_the_evaluation() {
     let out = std::env::temp_dir().join(format!("sornav-llm-fixture-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&out);
     let recording = data(RECORDING);
-    let args: [&std::ffi::OsStr; 16] = [
+    // The recording was made with the paper's route (the default before
+    // the minimum-latency route): a different route asks other questions.
+    let args: [&std::ffi::OsStr; 18] = [
+        "--route".as_ref(),
+        "path_length".as_ref(),
         "--scenes".as_ref(),
         "procedural:2".as_ref(),
         "--episodes-per-scene".as_ref(),

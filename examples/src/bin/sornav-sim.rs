@@ -12,6 +12,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use clap::{Args, Parser, Subcommand};
 use sornav::supervisor::LlmLatency;
 use sornav::supervisor::llm::transport::ReplayTransport;
+use sornav::tsp::RouteObjective;
 use sornav::{AgentConfig, PolicyConfig};
 use sornav_examples::adapter::{AdapterConfig, sim_agent_config};
 use sornav_examples::harness::{
@@ -173,6 +174,12 @@ struct RunArgs {
     /// its policy and frontier ordering.
     #[arg(long, value_name = "FILE")]
     config: Option<PathBuf>,
+    /// What the route through the frontiers minimises: `latency` (the
+    /// default: frontiers reached early) or `path_length` (the paper's
+    /// TSP). Overrides only `[horizon] objective` of `--config` or the
+    /// defaults; recorded in run.json's agent block.
+    #[arg(long, value_name = "latency|path_length", value_parser = parse_route)]
+    route: Option<RouteObjective>,
     /// Top-down maps: the first N episodes of every variant, plus up to N
     /// episodes with relocations.
     #[arg(long, value_name = "N", default_value_t = 4)]
@@ -240,6 +247,17 @@ fn parse_latency(s: &str) -> Result<LlmLatency, String> {
         ),
         Ok(l) => Ok(l),
         Err(e) => Err(e.to_string()),
+    }
+}
+
+/// `--route`: `latency` or `path_length` (`[horizon] objective`'s names).
+fn parse_route(s: &str) -> Result<RouteObjective, String> {
+    match s {
+        "latency" => Ok(RouteObjective::Latency),
+        "path_length" => Ok(RouteObjective::PathLength),
+        other => Err(format!(
+            "unknown route objective '{other}' (latency or path_length)"
+        )),
     }
 }
 
@@ -370,10 +388,13 @@ fn eval_config(a: &RunArgs) -> Result<EvalConfig, String> {
             ));
         }
     }
-    let agent = match &a.config {
+    let mut agent = match &a.config {
         Some(path) => AgentConfig::from_toml_file(path).map_err(|e| e.to_string())?,
         None => sim_agent_config(),
     };
+    if let Some(route) = a.route {
+        agent.horizon.objective = route;
+    }
     let llm = llm_settings(a, &agent)?;
     let (noise, noise_preset) = noise_settings(a)?;
     Ok(EvalConfig {
