@@ -273,7 +273,8 @@ impl Variant {
 /// its length, because a search ends when the target is seen, not when
 /// every frontier is covered. Measured on the same episodes (workspace
 /// README, "Nineteenth session"): six homes SPL +3.0 [+1.4, +4.7] points,
-/// under detector noise SR +3.1 [+0.7, +5.4]; procedural houses even.
+/// under detector noise SR +3.1 [+0.7, +5.4]; procedural houses even; the
+/// default since the twentieth session (its fixes and figures there).
 /// `horizon.objective = "path_length"` gives the paper's TSP.
 ///
 /// # Example
