@@ -2029,7 +2029,7 @@ impl Agent {
         let Some(crossing) = self.crossing.clone() else {
             return Ok(self.keep_going(now, step, reason.to_owned()));
         };
-        let (Some(&back), Some(&end)) = (crossing.path.first(), crossing.path.last()) else {
+        let Some(&end) = crossing.path.last() else {
             return Ok(self.keep_going(now, step, reason.to_owned()));
         };
         let Some(mut path) = self.plan_path(&pose.position, &end)? else {
@@ -2042,13 +2042,10 @@ impl Agent {
         };
         self.crossings_back += 1;
         path.extend(crossing.path.iter().rev().skip(1).copied());
-        let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
-        self.dispatch_as(
+        self.retrace(
             now,
             step,
-            mission,
             path,
-            DecisionAction::Retreat,
             format!(
                 "floor {} exhausted, floor {} still has frontiers the map gives no way to: back over the stair the robot came by ({reason})",
                 crossing.to.0, crossing.from.0
@@ -2462,18 +2459,30 @@ impl Agent {
         path: Vec<Point3<f64>>,
         reason: &str,
     ) -> Result<AgentCommand, AgentError> {
-        let Some(&back) = path.last() else {
-            return Ok(self.keep_going(now, step, reason.to_owned()));
-        };
-        let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
-        self.dispatch_as(
+        self.retrace(
             now,
             step,
-            mission,
             path,
-            DecisionAction::Retreat,
             format!("stuck where the last mission started: backing off along the way the robot came ({reason})"),
         )
+    }
+
+    /// Drives `path`, a way the robot came, to its last point and arrives
+    /// there (within [`BACK_OFF_ARRIVAL_M`], not anywhere within a
+    /// relocation's radius): a back-off, a walk back along the trail, a
+    /// crossing walked back.
+    fn retrace(
+        &mut self,
+        now: Duration,
+        step: DecisionStep,
+        path: Vec<Point3<f64>>,
+        reason: String,
+    ) -> Result<AgentCommand, AgentError> {
+        let Some(&back) = path.last() else {
+            return Ok(self.keep_going(now, step, reason));
+        };
+        let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
+        self.dispatch_as(now, step, mission, path, DecisionAction::Retreat, reason)
     }
 
     /// Off a known floor, nothing reachable, looked around: walks back
@@ -2500,13 +2509,10 @@ impl Agent {
                 // Onto the floor itself: within a relocation's radius of
                 // the trail's start the robot may still stand on the stair,
                 // where no floor's frontiers are reachable.
-                let mission = retreat_mission(back).with_arrival_radius(BACK_OFF_ARRIVAL_M);
-                self.dispatch_as(
+                self.retrace(
                     now,
                     step,
-                    mission,
                     path,
-                    DecisionAction::Retreat,
                     format!("nothing reachable off a known floor after looking around: back along the trail to the last floor ({reason})"),
                 )
             }
