@@ -51,7 +51,10 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     if objects {
         let listed = |o: &&sornav_platform_sim::ObjectInstance| {
-            matches!(o.kind, InstanceKind::Object | InstanceKind::Door | InstanceKind::Stairs)
+            matches!(
+                o.kind,
+                InstanceKind::Object | InstanceKind::Door | InstanceKind::Stairs
+            )
         };
         for o in scene.instances().iter().filter(listed) {
             let (lo, hi) = (o.bounds.min, o.bounds.max);
