@@ -47,7 +47,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::cell::cell_of;
 use crate::graph::pair;
-use crate::stairs::{OffLevelColumns, Params, Stair, extract};
+use crate::stairs::{OffLevelColumns, Params, Stair, WalkedStep, extract};
 use crate::surface::SurfaceMap;
 use crate::{
     AnchorNode, Cell, CellState, Edge, FrontierError, FrontierGraph, FrontierId, FrontierMap,
@@ -260,7 +260,26 @@ pub struct MultiLevelMap {
     /// costs amortised O(1) per new column.
     #[serde(skip)]
     first_level_checked: usize,
+    /// Moves of the robot's feet between columns at different heights
+    /// (oldest first, at most [`MAX_WALKED_STEPS`]): stair extraction
+    /// attaches a flight the robot walked onto (see [`WalkedStep`]).
+    #[serde(default)]
+    walked: Vec<WalkedStep>,
+    /// The feet of the last pose the robot's move is measured from (see
+    /// `record_walked_step`).
+    #[serde(skip)]
+    walk_anchor: Option<Point3<f64>>,
+    /// A step was recorded since the last stair extraction.
+    #[serde(skip)]
+    walked_changed: bool,
 }
+
+/// Most walked steps a [`MultiLevelMap`] keeps (the oldest go first).
+const MAX_WALKED_STEPS: usize = 1024;
+
+/// Longest horizontal move (m) between two poses that counts as one step
+/// of the robot's feet.
+const MAX_WALKED_STEP_M: f64 = 0.5;
 
 impl MultiLevelMap {
     /// An empty map. Level 0 is created at the first pose (at
@@ -283,6 +302,9 @@ impl MultiLevelMap {
             composed: false,
             first_level_established: false,
             first_level_checked: 0,
+            walked: Vec::new(),
+            walk_anchor: None,
+            walked_changed: false,
         })
     }
 
@@ -580,6 +602,7 @@ impl MultiLevelMap {
             cell_of(&p.xy(), res, "point", index)?;
         }
         self.ensure_first_level(feet)?;
+        self.record_walked_step(feet);
         if !self.cfg.levels.allow_stairs {
             let stats = self.maps[0].update_with_voids(origin, points, voids)?;
             if self.cfg.levels.detect_stairs {
@@ -665,7 +688,8 @@ impl MultiLevelMap {
     /// Re-extracts the stairs when the surfaces changed; creates the levels
     /// found over them.
     fn refresh_stairs(&mut self) -> Result<(), FrontierError> {
-        if !self.surfaces.take_dirty() {
+        let walked = std::mem::take(&mut self.walked_changed);
+        if !self.surfaces.take_dirty() && !walked {
             return Ok(());
         }
         let columns = self.surfaces.columns.len();
@@ -698,21 +722,83 @@ impl MultiLevelMap {
         let touched = self.surfaces.take_touched();
         self.off_level
             .update(&self.surfaces, &touched, &floors, &params);
-        if !self.off_level.stale() {
+        if !self.off_level.stale() && !walked {
             // Nothing the last extraction read has changed.
             return Ok(());
         }
-        let mut found = extract(&self.surfaces, &mut self.off_level, &floors, &params);
+        let mut found = extract(
+            &self.surfaces,
+            &mut self.off_level,
+            &floors,
+            &self.walked,
+            &params,
+        );
         if !found.new_levels.is_empty() && self.cfg.levels.allow_stairs {
             for h in found.new_levels.clone() {
                 self.add_level(h)?;
             }
             let floors: Vec<f64> = self.levels().map(|l| l.floor_z).collect();
             self.off_level.update(&self.surfaces, &[], &floors, &params);
-            found = extract(&self.surfaces, &mut self.off_level, &floors, &params);
+            found = extract(
+                &self.surfaces,
+                &mut self.off_level,
+                &floors,
+                &self.walked,
+                &params,
+            );
         }
         self.stairs = found.stairs;
         Ok(())
+    }
+
+    /// Records the move of the robot's feet from the last anchor pose to
+    /// `feet` as a [`WalkedStep`] when it changed columns and height (by
+    /// more than half the level tolerance, at most the largest column
+    /// rise of a flight) within [`MAX_WALKED_STEP_M`]; a longer move (a
+    /// jump of the pose) only moves the anchor, as does a recorded step.
+    /// A robot that climbs slowly accumulates the height over several
+    /// poses. O(1) amortised.
+    fn record_walked_step(&mut self, feet: &Point3<f64>) {
+        let Some(anchor) = self.walk_anchor else {
+            self.walk_anchor = Some(*feet);
+            return;
+        };
+        let horizontal = (feet.xy() - anchor.xy()).norm();
+        if horizontal > MAX_WALKED_STEP_M {
+            self.walk_anchor = Some(*feet);
+            return;
+        }
+        let lc = &self.cfg.levels;
+        let dz = (feet.z - anchor.z).abs();
+        if dz <= 0.5 * lc.level_tolerance {
+            return;
+        }
+        self.walk_anchor = Some(*feet);
+        let rise = lc.max_stair_column_rise.max(self.cfg.grid.step_height);
+        let ends = (
+            self.surfaces.key(anchor.x, anchor.y),
+            self.surfaces.key(feet.x, feet.y),
+        );
+        let (Some(a), Some(b)) = ends else {
+            return;
+        };
+        if a == b || dz > rise {
+            return;
+        }
+        // Heights are stored as the surface map stores them.
+        #[allow(clippy::cast_possible_truncation)]
+        let step = WalkedStep {
+            from: (a, anchor.z as f32),
+            to: (b, feet.z as f32),
+        };
+        if self.walked.contains(&step) {
+            return;
+        }
+        if self.walked.len() >= MAX_WALKED_STEPS {
+            self.walked.remove(0);
+        }
+        self.walked.push(step);
+        self.walked_changed = true;
     }
 
     /// Mapped floor area (m²) of level 0: surface columns with a surface

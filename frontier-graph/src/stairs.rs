@@ -17,10 +17,20 @@
 //!    two columns apart in one of the 8 directions when the column between
 //!    them holds no surface at all (a riser or tread edge the camera did
 //!    not resolve: seen from above at a grazing angle, a stair shows its
-//!    treads with unobserved columns between them). Off-level nodes
+//!    treads with unobserved columns between them), within a step of each
+//!    other, or, both off-level, within `max_stair_column_rise` (the riser
+//!    between may stand in the column not seen). Off-level nodes
 //!    are grouped into step-connected components (union-find); a component
 //!    is *attached* to a level when one of its nodes is step-connected to a
-//!    node on that level (a *foot*).
+//!    node on that level (a *foot*). Two more kinds of feet: a surface the
+//!    robot's own feet moved onto from the level ([`WalkedStep`]: a
+//!    flight's first column may rise two sub-steps from the floor, more
+//!    than a step, when its bottom sub-step is narrower than a column),
+//!    and, for a component that rises at least `min_stair_rise` from a
+//!    level, a node within `max_stair_column_rise` of its floor facing it
+//!    across at most [`GAP_FOOT_COLUMNS`] unobserved columns (seen from
+//!    the floor beside it, a flight's first treads lie at a grazing
+//!    angle).
 //! 3. A node is *walkable* when no column within the robot radius holds
 //!    only surfaces more than two step heights away from it (a wall top, a
 //!    drop-off) and at least half of those columns hold a surface within
@@ -170,6 +180,21 @@ pub(crate) struct Params {
     pub first_level_established: bool,
 }
 
+/// A move of the robot's feet between two surface columns at different
+/// heights (column, feet height at each end), recorded as the robot went:
+/// proof that the two surfaces are joined whatever the map shows between
+/// them. A column's top is its highest tread, so the first column of a
+/// flight whose bottom sub-step is narrower than a column rises more than
+/// a step from the floor beside it, and the flight stays unattached until
+/// the robot has walked onto it.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub(crate) struct WalkedStep {
+    /// Column and feet height before the move.
+    pub from: (ColumnKey, f32),
+    /// Column and feet height after it.
+    pub to: (ColumnKey, f32),
+}
+
 /// What [`extract`] found.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct Extraction {
@@ -305,18 +330,26 @@ struct ColumnTable {
 }
 
 impl ColumnTable {
-    /// The columns of `map` within `margin` of an off-level node.
+    /// The columns of `map` within `margin` of an off-level node, in a
+    /// box that reaches `reach` columns beyond the off-level nodes (the
+    /// columns between are looked up on demand, [`fill`](Self::fill)).
     ///
     /// # Complexity
     /// O(B + N m²) for B columns in the box (dense) and N off-level nodes
     /// with margin m.
-    fn new(map: &SurfaceMap, off: &[(ColumnKey, f32)], clearance: f32, margin: i32) -> Self {
+    fn new(
+        map: &SurfaceMap,
+        off: &[(ColumnKey, f32)],
+        clearance: f32,
+        margin: i32,
+        reach: i32,
+    ) -> Self {
         let (mut lo, mut hi) = ((i32::MAX, i32::MAX), (i32::MIN, i32::MIN));
         for &(k, _) in off {
             lo = (lo.0.min(k.0), lo.1.min(k.1));
             hi = (hi.0.max(k.0), hi.1.max(k.1));
         }
-        let m = i64::from(margin);
+        let m = i64::from(margin.max(reach));
         let min = (i64::from(lo.0) - m, i64::from(lo.1) - m);
         let dims = (
             (i64::from(hi.0) + m - min.0 + 1).max(0),
@@ -496,7 +529,10 @@ impl Nodes<'_> {
     /// in the same direction by at most a step each. Columns whose treads
     /// are shallower than a column differ by several risers on a steep
     /// stair; a chair seat beside a counter, or a footstool beside a chair,
-    /// has flat neighbours and stays a jump. Symmetric in the two nodes.
+    /// has flat neighbours and stays a jump. Both off-level two columns
+    /// apart (across a column without surfaces, see [`linked`](Self::linked)),
+    /// within `column_rise` whatever their neighbours: the riser between
+    /// them may stand in the column not seen. Symmetric in the two nodes.
     fn step_connected(&self, k: ColumnKey, z: f32, n: ColumnKey, z2: f32, kind: Kind) -> bool {
         let p = self.p;
         let jump = z2 - z;
@@ -504,12 +540,13 @@ impl Nodes<'_> {
             return true;
         }
         let d = (n.0 - k.0, n.1 - k.1);
-        if matches!(kind, Kind::On(_))
-            || jump.abs() > p.column_rise
-            || d.0.abs() > 1
-            || d.1.abs() > 1
-        {
+        if matches!(kind, Kind::On(_)) || jump.abs() > p.column_rise {
             return false;
+        }
+        if d.0.abs() > 1 || d.1.abs() > 1 {
+            // Across a column without surfaces: the riser between them
+            // may stand in it.
+            return true;
         }
         let min_rise = 0.5 * p.level_tolerance;
         let rises = |a: f32, b: f32| {
@@ -519,6 +556,24 @@ impl Nodes<'_> {
         let before = self.table.surfaces((k.0 - d.0, k.1 - d.1));
         let after = self.table.surfaces((n.0 + d.0, n.1 + d.1));
         before.iter().any(|&zb| rises(zb, z)) && after.iter().any(|&za| rises(z2, za))
+    }
+
+    /// The node of the surface in column `k` nearest to the feet height
+    /// `z`, within the level tolerance, with the column and the surface's
+    /// height; `None` when the column holds no such surface (or lies
+    /// outside the table's box: nowhere near an off-level node).
+    fn walked_node(
+        &mut self,
+        map: &SurfaceMap,
+        (k, z): (ColumnKey, f32),
+    ) -> Option<(Kind, ColumnKey, f32)> {
+        self.table.fill(k, map, self.p.clearance);
+        let zs = self.table.surfaces(k);
+        let &s = zs
+            .iter()
+            .filter(|s| (**s - z).abs() <= self.p.level_tolerance)
+            .min_by(|a, b| (**a - z).abs().total_cmp(&(**b - z).abs()))?;
+        self.kind(k, s).map(|kind| (kind, k, s))
     }
 
     /// The node of surface `z` of column `k`.
@@ -537,6 +592,7 @@ pub(crate) fn extract(
     map: &SurfaceMap,
     off_columns: &mut OffLevelColumns,
     levels: &[f64],
+    walked: &[WalkedStep],
     p: &Params,
 ) -> Extraction {
     let res = map.resolution;
@@ -555,7 +611,7 @@ pub(crate) fn extract(
     // surface resolution at least 0.02 m.
     #[allow(clippy::cast_possible_truncation)]
     let ri = r.ceil() as i32;
-    let table = ColumnTable::new(map, &off, p.clearance, ri.max(2));
+    let table = ColumnTable::new(map, &off, p.clearance, ri.max(2), GAP_FOOT_COLUMNS);
     off_columns.stale = false;
     if off.is_empty() {
         off_columns.last = Some(table);
@@ -584,6 +640,17 @@ pub(crate) fn extract(
             }
         }
     }
+    // 2a. Feet the robot walked: a level's surface and an off-level one
+    // joined by a move of the robot's feet.
+    for w in walked {
+        match (nodes.walked_node(map, w.from), nodes.walked_node(map, w.to)) {
+            (Some((Kind::On(l), k, zl)), Some((Kind::Off(i), _, _)))
+            | (Some((Kind::Off(i), _, _)), Some((Kind::On(l), k, zl))) => {
+                feet.push((i, l, k, zl));
+            }
+            _ => {}
+        }
+    }
     let mut comps: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
     for i in 0..off.len() {
         comps.entry(uf.find(i)).or_default().push(i);
@@ -591,6 +658,15 @@ pub(crate) fn extract(
     let mut comp_feet: BTreeMap<usize, Vec<Foot>> = BTreeMap::new();
     for f in feet {
         comp_feet.entry(uf.find(f.0)).or_default().push(f);
+    }
+    // 2a'. Flights seen from their foot across unobserved columns.
+    for (root, members) in &comps {
+        if !comp_feet.contains_key(root) {
+            let found = gap_feet(&mut nodes, map, members);
+            if !found.is_empty() {
+                comp_feet.insert(*root, found);
+            }
+        }
     }
     // 2b. How far each attached component's flight is sighted across
     // unobserved columns (only where its own surfaces fall short).
@@ -863,6 +939,127 @@ fn gap_sighting(
         }
     }
     out
+}
+
+/// Farthest (columns) from a level's floor that a flight's first tread is
+/// looked for across unobserved columns ([`gap_feet`]).
+const GAP_FOOT_COLUMNS: i32 = 3;
+
+/// The feet of an unattached component (`members`) that is a flight seen
+/// from its foot: its own surfaces rise (descend) at least
+/// `min_stair_rise` beyond a level (as a partly seen stair must), and one of its nodes within the
+/// largest column rise of that level's floor faces, in one of the 8
+/// directions, a surface on the level at most [`GAP_FOOT_COLUMNS`]
+/// columns away with only columns without surfaces between. From the
+/// floor beside a flight, a camera at the robot's height sees the treads
+/// rising away but often not the first one or two, whose tops lie at a
+/// grazing angle (and, on a winding flight, behind the wall of its turn);
+/// a column between a floor and a furniture top is rarely unobserved
+/// while the furniture also rises as far as a flight.
+///
+/// Every column it reads is looked up in the table (see [`gap_sighting`]).
+///
+/// # Complexity
+/// O(m) for the m members, plus O(8 [`GAP_FOOT_COLUMNS`]) column lookups
+/// for each member near a level.
+fn gap_feet(nodes: &mut Nodes<'_>, map: &SurfaceMap, members: &[usize]) -> Vec<Foot> {
+    let (p, off, levels) = (nodes.p, nodes.off, nodes.levels);
+    let (lo, hi) = members
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, b), &i| {
+            (a.min(off[i].1), b.max(off[i].1))
+        });
+    let mut out = Vec::new();
+    for &i in members {
+        let (k, z) = off[i];
+        for (l, &h) in levels.iter().enumerate() {
+            // The flight rises away from level l (dir +1) or descends
+            // from it (-1).
+            let dir = if f64::from(z) > h { 1.0 } else { -1.0 };
+            let above = (f64::from(z) - h) * dir;
+            let reach = if dir > 0.0 {
+                f64::from(hi) - h
+            } else {
+                h - f64::from(lo)
+            };
+            if above > f64::from(p.column_rise) || reach < p.min_stair_rise {
+                continue;
+            }
+            for (dx, dy) in DIRS8 {
+                for n in 2..=GAP_FOOT_COLUMNS {
+                    let c = (k.0 + n * dx, k.1 + n * dy);
+                    let between_unseen = (1..n).all(|t| {
+                        let b = (k.0 + t * dx, k.1 + t * dy);
+                        nodes.table.fill(b, map, p.clearance);
+                        nodes.table.surfaces(b).is_empty()
+                    });
+                    if !between_unseen {
+                        break;
+                    }
+                    nodes.table.fill(c, map, p.clearance);
+                    let on = nodes.table.surfaces(c).iter().copied().find(|&zc| {
+                        level_of(zc, levels, p.level_tolerance) == Some(l)
+                            && (z - zc).abs() <= p.column_rise
+                    });
+                    if let Some(zc) = on {
+                        if climbs_on(nodes, map, k, z, (-dx, -dy), dir as f32) {
+                            out.push((i, l, c, zc));
+                        }
+                        break;
+                    }
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Treads a flight must climb beyond its foot, walking away from the
+/// floor, to be attached across unobserved columns ([`climbs_on`]).
+const GAP_FOOT_TREADS: usize = 2;
+
+/// Whether walking from surface `z` of column `k` in direction `away`
+/// (away from the floor) over at most 2 [`GAP_FOOT_COLUMNS`] + 2
+/// columns, from each surface to the next column's surface within a step
+/// of it, the height changes in direction `dir` (+1 up) by more than the
+/// level tolerance [`GAP_FOOT_TREADS`] times and never back: a flight
+/// goes on climbing away from its foot, where a furniture top (a bed's
+/// base, a sofa's seat) stays flat or ends.
+fn climbs_on(
+    nodes: &mut Nodes<'_>,
+    map: &SurfaceMap,
+    k: ColumnKey,
+    z: f32,
+    away: (i32, i32),
+    dir: f32,
+) -> bool {
+    let p = nodes.p;
+    let (mut z, mut treads) = (z, 0);
+    for t in 1..=2 * GAP_FOOT_COLUMNS + 2 {
+        let c = (k.0 + t * away.0, k.1 + t * away.1);
+        nodes.table.fill(c, map, p.clearance);
+        let Some(&next) = nodes
+            .table
+            .surfaces(c)
+            .iter()
+            .filter(|s| (**s - z).abs() <= p.step)
+            .min_by(|a, b| (**a - z).abs().total_cmp(&(**b - z).abs()))
+        else {
+            return false;
+        };
+        let rise = (next - z) * dir;
+        if rise < -p.level_tolerance {
+            return false;
+        }
+        if rise > p.level_tolerance {
+            treads += 1;
+            if treads >= GAP_FOOT_TREADS {
+                return true;
+            }
+        }
+        z = next;
+    }
+    false
 }
 
 /// Where a stair meets a level: (off-level node, level, the adjacent
@@ -1154,7 +1351,7 @@ mod tests {
         let mut off = OffLevelColumns::default();
         let touched = map.take_touched();
         off.update(&map, &touched, &[0.0], p);
-        extract(&map, &mut off, &[0.0], p)
+        extract(&map, &mut off, &[0.0], &[], p)
     }
 
     proptest! {
@@ -1418,5 +1615,138 @@ mod tests {
         }
         let found = extract_seen(&Point3::new(0.5, 0.5, 6.0), &points, &p);
         assert!(found.stairs.is_empty(), "{:?}", found.stairs);
+    }
+
+    /// A straight flight 1 m wide rising 0.11 m per column from the floor
+    /// (y < 1) from `first` at its first column, `gap` columns left
+    /// unobserved between the floor and that first column (the flight is
+    /// moved back by them), up to 1.21 m, seen from above its foot; the
+    /// surface map and its off-level columns.
+    fn flight_map(first: f64, gap: i32, p: &Params) -> (SurfaceMap, OffLevelColumns) {
+        let mut points = Vec::new();
+        for kx in 0..30 {
+            for ky in 0..(24 + gap) {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                let z = if ky < 10 {
+                    0.0
+                } else if kx == 9 || kx == 20 {
+                    2.5 // the stairwell's walls
+                } else if !(10..20).contains(&kx) || ky < 10 + gap {
+                    continue;
+                } else {
+                    (first + 0.11 * f64::from(ky - 10 - gap)).min(1.21)
+                };
+                points.push(Point3::new(x, y, z));
+            }
+        }
+        let mut map = SurfaceMap::new(0.1);
+        map.integrate(&Point3::new(1.5, 0.5, 6.0), &points, 10.0);
+        let mut off = OffLevelColumns::default();
+        let touched = map.take_touched();
+        off.update(&map, &touched, &[0.0], p);
+        (map, off)
+    }
+
+    /// The flight's first column rises 0.22 m from the floor beside it (a
+    /// 0.11 m sub-step narrower than a column, the next one's top in the
+    /// same column): more than a step, so the flight is not attached to
+    /// the floor until the robot has walked from the floor onto it.
+    #[test]
+    fn a_flight_the_robot_walked_onto_is_attached() {
+        let p = params();
+        let (map, mut off) = flight_map(0.22, 0, &p);
+        assert!(extract(&map, &mut off, &[0.0], &[], &p).stairs.is_empty());
+        // walked from the floor (column (15, 8)) onto the first tread
+        let walked = [WalkedStep {
+            from: ((15, 8), 0.0),
+            to: ((15, 10), 0.22),
+        }];
+        let found = extract(&map, &mut off, &[0.0], &walked, &p);
+        assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
+        let s = &found.stairs[0];
+        assert_eq!(s.lower.level, Some(LevelId(0)));
+        let open = s.open_end().expect("a partly seen stair");
+        assert!(open.position.z > 1.0, "{open:?}");
+        // a step somewhere else (between two floor columns, or onto a
+        // column without an off-level surface at that height) attaches
+        // nothing
+        for w in [
+            WalkedStep {
+                from: ((5, 5), 0.0),
+                to: ((5, 7), 0.0),
+            },
+            WalkedStep {
+                from: ((15, 8), 0.0),
+                to: ((15, 10), 0.6),
+            },
+        ] {
+            assert!(extract(&map, &mut off, &[0.0], &[w], &p).stairs.is_empty());
+        }
+    }
+
+    /// Seen from its foot, a flight's first one or two treads may lie at a
+    /// grazing angle and stay unobserved: a flight that rises far enough
+    /// and starts within the largest column rise of the floor, across at
+    /// most [`GAP_FOOT_COLUMNS`] unobserved columns, is attached; a
+    /// furniture top as high does not rise as a flight and is not, nor is
+    /// a flight farther away than that.
+    #[test]
+    fn a_flight_seen_across_unobserved_columns_at_its_foot_is_attached() {
+        let p = params();
+        for gap in [1, 2] {
+            let (map, mut off) = flight_map(0.22, gap, &p);
+            let found = extract(&map, &mut off, &[0.0], &[], &p);
+            assert_eq!(found.stairs.len(), 1, "gap {gap}: {:?}", found.stairs);
+            assert_eq!(found.stairs[0].lower.level, Some(LevelId(0)));
+        }
+        // too far from the floor
+        let (map, mut off) = flight_map(0.22, 3, &p);
+        assert!(extract(&map, &mut off, &[0.0], &[], &p).stairs.is_empty());
+        // a flat top 0.3 m high across an unobserved column: no flight
+        let mut points = Vec::new();
+        for kx in 0..30 {
+            for ky in 0..20 {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                let z = if ky < 10 {
+                    0.0
+                } else if ky == 10 || !(10..20).contains(&kx) {
+                    continue;
+                } else {
+                    0.3
+                };
+                points.push(Point3::new(x, y, z));
+            }
+        }
+        assert!(
+            extract_seen(&Point3::new(1.5, 0.5, 6.0), &points, &p)
+                .stairs
+                .is_empty()
+        );
+    }
+
+    /// A flight with one unobserved column inside it, its treads on both
+    /// sides two risers apart (0.22 m, more than a step): one flight, the
+    /// riser between may stand in the column not seen.
+    #[test]
+    fn a_flight_continues_across_an_unobserved_column() {
+        let p = params();
+        let mut points = Vec::new();
+        for kx in 0..30 {
+            for ky in 0..24 {
+                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
+                let z = if ky < 10 {
+                    0.0
+                } else if !(10..20).contains(&kx) || ky == 13 {
+                    continue;
+                } else {
+                    (0.11 * f64::from(ky - 9)).min(1.21)
+                };
+                points.push(Point3::new(x, y, z));
+            }
+        }
+        let found = extract_seen(&Point3::new(1.5, 0.5, 6.0), &points, &p);
+        assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
+        let open = found.stairs[0].open_end().expect("a partly seen stair");
+        assert!(open.position.z > 1.0, "{open:?}");
     }
 }
