@@ -17,9 +17,7 @@
 //!    two columns apart in one of the 8 directions when the column between
 //!    them holds no surface at all (a riser or tread edge the camera did
 //!    not resolve: seen from above at a grazing angle, a stair shows its
-//!    treads with unobserved columns between them), within a step of each
-//!    other, or, both off-level, within `max_stair_column_rise` (the riser
-//!    between may stand in the column not seen). Off-level nodes
+//!    treads with unobserved columns between them). Off-level nodes
 //!    are grouped into step-connected components (union-find); a component
 //!    is *attached* to a level when one of its nodes is step-connected to a
 //!    node on that level (a *foot*). Two more kinds of feet: a surface the
@@ -529,10 +527,7 @@ impl Nodes<'_> {
     /// in the same direction by at most a step each. Columns whose treads
     /// are shallower than a column differ by several risers on a steep
     /// stair; a chair seat beside a counter, or a footstool beside a chair,
-    /// has flat neighbours and stays a jump. Both off-level two columns
-    /// apart (across a column without surfaces, see [`linked`](Self::linked)),
-    /// within `column_rise` whatever their neighbours: the riser between
-    /// them may stand in the column not seen. Symmetric in the two nodes.
+    /// has flat neighbours and stays a jump. Symmetric in the two nodes.
     fn step_connected(&self, k: ColumnKey, z: f32, n: ColumnKey, z2: f32, kind: Kind) -> bool {
         let p = self.p;
         let jump = z2 - z;
@@ -540,13 +535,12 @@ impl Nodes<'_> {
             return true;
         }
         let d = (n.0 - k.0, n.1 - k.1);
-        if matches!(kind, Kind::On(_)) || jump.abs() > p.column_rise {
+        if matches!(kind, Kind::On(_))
+            || jump.abs() > p.column_rise
+            || d.0.abs() > 1
+            || d.1.abs() > 1
+        {
             return false;
-        }
-        if d.0.abs() > 1 || d.1.abs() > 1 {
-            // Across a column without surfaces: the riser between them
-            // may stand in it.
-            return true;
         }
         let min_rise = 0.5 * p.level_tolerance;
         let rises = |a: f32, b: f32| {
@@ -1722,31 +1716,5 @@ mod tests {
                 .stairs
                 .is_empty()
         );
-    }
-
-    /// A flight with one unobserved column inside it, its treads on both
-    /// sides two risers apart (0.22 m, more than a step): one flight, the
-    /// riser between may stand in the column not seen.
-    #[test]
-    fn a_flight_continues_across_an_unobserved_column() {
-        let p = params();
-        let mut points = Vec::new();
-        for kx in 0..30 {
-            for ky in 0..24 {
-                let (x, y) = (f64::from(kx) * 0.1 + 0.05, f64::from(ky) * 0.1 + 0.05);
-                let z = if ky < 10 {
-                    0.0
-                } else if !(10..20).contains(&kx) || ky == 13 {
-                    continue;
-                } else {
-                    (0.11 * f64::from(ky - 9)).min(1.21)
-                };
-                points.push(Point3::new(x, y, z));
-            }
-        }
-        let found = extract_seen(&Point3::new(1.5, 0.5, 6.0), &points, &p);
-        assert_eq!(found.stairs.len(), 1, "{:?}", found.stairs);
-        let open = found.stairs[0].open_end().expect("a partly seen stair");
-        assert!(open.position.z > 1.0, "{open:?}");
     }
 }
