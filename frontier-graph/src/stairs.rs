@@ -21,12 +21,12 @@
 //!    are grouped into step-connected components (union-find); a component
 //!    is *attached* to a level when one of its nodes is step-connected to a
 //!    node on that level (a *foot*). Two more kinds of feet: a surface the
-//!    robot's own feet moved onto from the level ([`WalkedStep`]: a
+//!    robot's own feet moved onto from the level (`WalkedStep`: a
 //!    flight's first column may rise two sub-steps from the floor, more
 //!    than a step, when its bottom sub-step is narrower than a column),
 //!    and, for a component that rises at least `min_stair_rise` from a
 //!    level, a node within `max_stair_column_rise` of its floor facing it
-//!    across at most [`GAP_FOOT_COLUMNS`] unobserved columns (seen from
+//!    across at most `GAP_FOOT_COLUMNS` (3) unobserved columns (seen from
 //!    the floor beside it, a flight's first treads lie at a grazing
 //!    angle).
 //! 3. A node is *walkable* when no column within the robot radius holds
