@@ -19,40 +19,21 @@
 //! partly seen). Skipped with a message when the shared data is missing,
 //! a failure when `CI=true`.
 
+mod absent_target;
 #[allow(dead_code)] // this binary uses only the simulator helper
 mod common;
 
+use absent_target::{AbsentTargetFactory, absent_target_episode};
 use common::simulator_160x120;
 use nalgebra::Point3;
 use sornav::frontier_graph::LevelId;
-use sornav::{Agent, AgentError, LabelEntry};
-use sornav_examples::adapter::{
-    AdapterConfig, AgentFactory, ConfigFactory, SornavPolicy, sim_agent_config,
-};
-use sornav_platform_sim::{Episode, ObjectGoal, RunConfig, Scene, ViewPoint, run_episode};
+use sornav_examples::adapter::{AdapterConfig, ConfigFactory, SornavPolicy, sim_agent_config};
+use sornav_platform_sim::{RunConfig, Scene, run_episode};
 
-/// The target: a category no instance of the home carries.
-const ABSENT: &str = "no_such_object";
 /// Actions per start.
 const BUDGET: usize = 250;
 /// Height (m) above the start floor a mapped stair must reach.
 const MIN_RISE_M: f64 = 1.0;
-
-/// Builds the simulator agent with one more category, [`ABSENT`].
-struct AbsentTargetFactory(ConfigFactory);
-
-impl AgentFactory for AbsentTargetFactory {
-    fn build(&self, labels: &[LabelEntry]) -> Result<Agent, AgentError> {
-        let mut labels = labels.to_vec();
-        let id = labels.iter().map(|l| l.id).max().unwrap_or(0) + 1;
-        labels.push(LabelEntry {
-            id,
-            name: ABSENT.to_owned(),
-            ignored: false,
-        });
-        self.0.build(&labels)
-    }
-}
 
 #[test]
 fn the_curved_stair_is_mapped_from_the_basement_beside_its_foot() {
@@ -92,28 +73,12 @@ fn the_curved_stair_is_mapped_from_the_basement_beside_its_foot() {
             .height_at(x, y, -1.5)
             .unwrap_or_else(|| panic!("no basement floor at ({x}, {y})"));
         let p = Point3::new(x, y, z);
-        let episode = Episode {
-            episode_id: format!("({x}, {y}) yaw {yaw:.2}"),
-            scene_id: "2BedroomHouseWithBasement".to_owned(),
-            start_position: p,
-            start_yaw: yaw,
-            object_category: ABSENT.to_owned(),
-            goals: vec![ObjectGoal {
-                object_id: u64::MAX,
-                object_name: None,
-                category: ABSENT.to_owned(),
-                position: p,
-                view_points: vec![ViewPoint {
-                    position: p,
-                    yaw: 0.0,
-                    iou: None,
-                }],
-            }],
-            geodesic_distance: None,
-            euclidean_distance: None,
-            closest_goal_object_id: None,
-            cross_floor: None,
-        };
+        let episode = absent_target_episode(
+            format!("({x}, {y}) yaw {yaw:.2}"),
+            "2BedroomHouseWithBasement",
+            p,
+            yaw,
+        );
         let factory = AbsentTargetFactory(ConfigFactory {
             config: sim_agent_config(),
             policy: None,

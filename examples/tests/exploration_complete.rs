@@ -44,6 +44,7 @@
 //! [`known_incomplete_explorations`], whose doc comment gives the
 //! figures and causes.
 
+mod absent_target;
 #[allow(dead_code)] // this binary uses only the simulator helper
 mod common;
 
@@ -51,22 +52,19 @@ use std::path::Path;
 use std::sync::Mutex;
 use std::time::Instant;
 
+use absent_target::{AbsentTargetFactory, absent_target_episode};
 use common::simulator_160x120;
 use nalgebra::{Point2, Point3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use sornav::Agent;
 use sornav::frontier_graph::{CellState, LevelId, NodeId, OccupancyGrid};
-use sornav::{Agent, AgentError, LabelEntry};
 use sornav_examples::adapter::{
-    AdapterConfig, AgentFactory, ConfigFactory, EpisodeTrace, SornavPolicy, sim_agent_config,
+    AdapterConfig, ConfigFactory, EpisodeTrace, SornavPolicy, sim_agent_config,
 };
 use sornav_platform_sim::levels::LEVEL_HALF_HEIGHT;
-use sornav_platform_sim::{
-    Episode, NavMesh, ObjectGoal, RunConfig, Scene, Simulator, SpanId, ViewPoint, run_episode,
-};
+use sornav_platform_sim::{NavMesh, RunConfig, Scene, Simulator, SpanId, run_episode};
 
-/// The target: a category no instance of any home carries.
-const ABSENT: &str = "no_such_object";
 /// Action budget per home (scan turns included).
 const BUDGET: usize = 1500;
 /// Largest reachable unknown component allowed (m²).
@@ -79,23 +77,6 @@ const RANDOM_STARTS: usize = 2;
 const START_HEIGHT_TOLERANCE: f64 = 0.1;
 /// Seed of the random starts.
 const SEED: u64 = 20;
-
-/// Builds the simulator agent with one more category, [`ABSENT`], that no
-/// pixel is ever labelled with.
-struct AbsentTargetFactory(ConfigFactory);
-
-impl AgentFactory for AbsentTargetFactory {
-    fn build(&self, labels: &[LabelEntry]) -> Result<Agent, AgentError> {
-        let mut labels = labels.to_vec();
-        let id = labels.iter().map(|l| l.id).max().unwrap_or(0) + 1;
-        labels.push(LabelEntry {
-            id,
-            name: ABSENT.to_owned(),
-            ignored: false,
-        });
-        self.0.build(&labels)
-    }
-}
 
 /// One unknown component.
 #[derive(Debug, Clone)]
@@ -277,30 +258,7 @@ fn explore(sim: &Simulator, name: &str, start: &Start) -> HomeResult {
     let t0 = Instant::now();
     let nav = sim.nav();
     let p = start.position;
-    // A placeholder goal at the start: run_episode needs a view point; the
-    // agent never looks for it (its target is ABSENT).
-    let episode = Episode {
-        episode_id: format!("{name}-{}", start.label),
-        scene_id: name.to_owned(),
-        start_position: p,
-        start_yaw: 0.0,
-        object_category: ABSENT.to_owned(),
-        goals: vec![ObjectGoal {
-            object_id: u64::MAX,
-            object_name: None,
-            category: ABSENT.to_owned(),
-            position: p,
-            view_points: vec![ViewPoint {
-                position: p,
-                yaw: 0.0,
-                iou: None,
-            }],
-        }],
-        geodesic_distance: None,
-        euclidean_distance: None,
-        closest_goal_object_id: None,
-        cross_floor: None,
-    };
+    let episode = absent_target_episode(format!("{name}-{}", start.label), name, p, 0.0);
     let mut config = sim_agent_config();
     config.frontier.levels.allow_stairs = allow_stairs();
     let factory = AbsentTargetFactory(ConfigFactory {

@@ -562,11 +562,7 @@ impl Nodes<'_> {
         (k, z): (ColumnKey, f32),
     ) -> Option<(Kind, ColumnKey, f32)> {
         self.table.fill(k, map, self.p.clearance);
-        let zs = self.table.surfaces(k);
-        let &s = zs
-            .iter()
-            .filter(|s| (**s - z).abs() <= self.p.level_tolerance)
-            .min_by(|a, b| (**a - z).abs().total_cmp(&(**b - z).abs()))?;
+        let s = nearest_within(self.table.surfaces(k), z, self.p.level_tolerance)?;
         self.kind(k, s).map(|kind| (kind, k, s))
     }
 
@@ -1008,6 +1004,14 @@ fn gap_feet(nodes: &mut Nodes<'_>, map: &SurfaceMap, members: &[usize]) -> Vec<F
     out
 }
 
+/// The surface of `zs` nearest to `z` within `tolerance`.
+fn nearest_within(zs: &[f32], z: f32, tolerance: f32) -> Option<f32> {
+    zs.iter()
+        .copied()
+        .filter(|s| (s - z).abs() <= tolerance)
+        .min_by(|a, b| (a - z).abs().total_cmp(&(b - z).abs()))
+}
+
 /// Treads a flight must climb beyond its foot, walking away from the
 /// floor, to be attached across unobserved columns ([`climbs_on`]).
 const GAP_FOOT_TREADS: usize = 2;
@@ -1032,13 +1036,7 @@ fn climbs_on(
     for t in 1..=2 * GAP_FOOT_COLUMNS + 2 {
         let c = (k.0 + t * away.0, k.1 + t * away.1);
         nodes.table.fill(c, map, p.clearance);
-        let Some(&next) = nodes
-            .table
-            .surfaces(c)
-            .iter()
-            .filter(|s| (**s - z).abs() <= p.step)
-            .min_by(|a, b| (**a - z).abs().total_cmp(&(**b - z).abs()))
-        else {
+        let Some(next) = nearest_within(nodes.table.surfaces(c), z, p.step) else {
             return false;
         };
         let rise = (next - z) * dir;
