@@ -304,10 +304,11 @@ pub struct SornavPolicy<F> {
     last_act_end: Option<Instant>,
     exhausted_turns: usize,
     turns: i32,
-    /// Camera pitch of the current frame (rad, positive up) and the tilt
-    /// of one LOOK_UP / LOOK_DOWN (rad).
+    /// Camera pitch of the current frame (rad, positive up), the tilt
+    /// of one LOOK_UP / LOOK_DOWN and the platform's largest tilt (rad).
     pitch: f64,
     tilt: f64,
+    max_tilt: f64,
     /// The followed mission's look-at point.
     look_at: Option<Point3<f64>>,
     /// Camera mount height (m) and half the vertical field of view (rad).
@@ -368,6 +369,7 @@ impl<F: AgentFactory> SornavPolicy<F> {
             turns: 12,
             pitch: 0.0,
             tilt: 30f64.to_radians(),
+            max_tilt: 60f64.to_radians(),
             look_at: None,
             mount: 0.88,
             half_vfov: 0.55,
@@ -549,18 +551,29 @@ impl<F: AgentFactory> SornavPolicy<F> {
     /// descends more steeply (about 34 degrees) than half the camera's
     /// vertical field of view (31 degrees at 640x480, HFOV 79), so with a
     /// level camera the treads below are never seen and the stair's open
-    /// end cannot advance. Down when the goal is more than 0.3 m below the
-    /// feet and the robot is on a stair or within 2 m of a stair's upper
-    /// end, or when the goal is at the feet' height within 1 m of a stair's
-    /// open lower end (arrived there: look further down); level otherwise. `None`: the camera is where it should be.
+    /// end cannot advance.
+    ///
+    /// * One tilt step down when the goal is more than 0.3 m below the
+    ///   feet and the robot is on a level within 2 m of a stair's upper
+    ///   end (the flight ahead comes into view).
+    /// * As far down as the platform tilts (60 degrees here) on a stair
+    ///   with the goal below, and within 1 m of a stair's open lower end
+    ///   with the goal at the feet' height (arrived there): one step down
+    ///   shows the treads only from about 0.7 m ahead, so the treads just
+    ///   below the feet stay unseen and a flight seen from both of its
+    ///   ends keeps an unobserved gap the robot cannot cross.
+    /// * At an arrived goal whose look-at point lies below the camera's
+    ///   view: the fewest steps down that bring it into view.
+    ///
+    /// Level otherwise. `None`: the camera is where it should be.
     fn stair_tilt(&self, agent: &Agent, feet: &Point3<f64>) -> Option<Action> {
         let map = agent.frontier_map();
         let below = self.follower.waypoint().is_some_and(|w| w.z < feet.z - 0.3);
-        let near_top = map.level_at(feet.z).is_none()
-            || map.stairs().iter().any(|s| {
-                (s.upper.position.z - feet.z).abs() < 0.3
-                    && (s.upper.position.xy() - feet.xy()).norm() < 2.0
-            });
+        let on_stair = map.level_at(feet.z).is_none();
+        let near_top = map.stairs().iter().any(|s| {
+            (s.upper.position.z - feet.z).abs() < 0.3
+                && (s.upper.position.xy() - feet.xy()).norm() < 2.0
+        });
         // At the open lower end of a stair going down (the robot arrived
         // at it): the steps further down are only seen looking down.
         let at_open_bottom = self
@@ -573,24 +586,27 @@ impl<F: AgentFactory> SornavPolicy<F> {
                     && (s.lower.position - feet).norm() < 1.0
             });
         // Arrived at a goal whose look-at point (an explored frontier's
-        // floor) lies below the level camera's field of view: look down at
-        // it (a stairwell's treads are only seen so).
-        let look_down = self.look_at.is_some_and(|look| {
-            self.follower.waypoint().is_some_and(|w| {
+        // floor) lies below the camera's field of view: look down at it
+        // (a stairwell's treads are only seen so).
+        let look_down = self.look_at.and_then(|look| {
+            let arrived = self.follower.waypoint().is_some_and(|w| {
                 (w.xy() - feet.xy()).norm() < self.follower.config().path_point_radius_m
                     && (w.z - feet.z).abs() <= 0.3
-            }) && {
-                let eye_above = feet.z + self.mount - look.z;
-                let d = (look.xy() - feet.xy()).norm();
-                eye_above > 0.0 && eye_above > d * (self.half_vfov - 0.05).tan()
-            }
+            });
+            let eye_above = feet.z + self.mount - look.z;
+            let d = (look.xy() - feet.xy()).norm();
+            (arrived && eye_above > 0.0)
+                .then(|| tilt_to_see(eye_above.atan2(d), self.half_vfov, self.tilt, self.max_tilt))
+                .filter(|&t| t > 0.0)
         });
-        let want = if (below && near_top) || at_open_bottom || look_down {
-            -self.tilt
+        let down = if (below && on_stair) || at_open_bottom {
+            self.max_tilt
+        } else if below && near_top {
+            self.tilt
         } else {
             0.0
         };
-        self.tilt_toward(want)
+        self.tilt_toward(-down.max(look_down.unwrap_or(0.0)))
     }
 
     /// LOOK_DOWN / LOOK_UP toward camera pitch `want` (radians, positive
@@ -625,6 +641,22 @@ impl<F: AgentFactory> SornavPolicy<F> {
     }
 }
 
+/// The smallest downward camera tilt (rad), in whole steps of `step` and
+/// at most `max`, that brings a point `below` radians under the horizon
+/// into a vertical field of view of half-angle `half_vfov` (less a
+/// 0.05 rad margin); `max` when no such tilt reaches it, 0 when the level
+/// camera sees it.
+///
+/// # Complexity
+/// `O(1)`.
+fn tilt_to_see(below: f64, half_vfov: f64, step: f64, max: f64) -> f64 {
+    let needed = below - (half_vfov - 0.05);
+    if !(needed > 0.0 && step > 0.0) {
+        return 0.0;
+    }
+    ((needed / step).ceil() * step).min(max.max(0.0))
+}
+
 impl<F: AgentFactory> Policy for SornavPolicy<F> {
     fn reset(&mut self, sim: &Simulator, episode: &Episode) {
         let labels = SceneLabels::of(sim.scene());
@@ -648,6 +680,7 @@ impl<F: AgentFactory> Policy for SornavPolicy<F> {
         self.follower.set_motion(motion);
         self.turns = (360.0 / motion.turn_deg).round().max(2.0) as i32;
         self.tilt = motion.tilt_deg.to_radians();
+        self.max_tilt = motion.max_tilt_deg.to_radians();
         self.pitch = 0.0;
         self.target = episode.object_category.clone();
         self.agent = match self.factory.build(labels.entries()) {
@@ -890,6 +923,55 @@ impl<F: AgentFactory> SornavPolicy<F> {
                     Action::Stop
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::tilt_to_see;
+    use proptest::prelude::*;
+
+    /// Reference: try 0, 1, 2, ... steps (clamped to `max`, as the
+    /// simulator clamps the pitch) and return the first that shows the
+    /// point, or the largest tilt.
+    fn brute_force(below: f64, half_vfov: f64, step: f64, max: f64) -> f64 {
+        let mut k = 0.0;
+        loop {
+            let t = (k * step).min(max.max(0.0));
+            if below <= t + half_vfov - 0.05 || t >= max.max(0.0) {
+                return t;
+            }
+            k += 1.0;
+        }
+    }
+
+    #[test]
+    fn treads_below_the_feet_need_the_largest_tilt() {
+        let (half, step, max) = (0.55, 30f64.to_radians(), 60f64.to_radians());
+        // A tread 0.3 m ahead and 0.3 m below the feet, camera at 0.88 m.
+        let below = (0.88f64 + 0.3).atan2(0.3);
+        assert!((tilt_to_see(below, half, step, max) - max).abs() < 1e-12);
+        // The floor 2 m ahead: the level camera sees it.
+        assert_eq!(tilt_to_see(0.88f64.atan2(2.0), half, step, max), 0.0);
+        // The floor 1 m ahead: one step.
+        assert!((tilt_to_see(0.88f64.atan2(1.0), half, step, max) - step).abs() < 1e-12);
+    }
+
+    proptest! {
+        #[test]
+        fn matches_the_step_by_step_search(
+            below in -1.6f64..1.6,
+            half in 0.1f64..1.2,
+            step_deg in 5.0f64..45.0,
+            max_deg in 0.0f64..90.0,
+        ) {
+            let (step, max) = (step_deg.to_radians(), max_deg.to_radians());
+            let t = tilt_to_see(below, half, step, max);
+            prop_assert!((0.0..=max + 1e-12).contains(&t));
+            prop_assert!((t - brute_force(below, half, step, max)).abs() < 1e-9);
+            // The tilt shows the point unless the platform cannot tilt that far.
+            prop_assert!(below <= t + half - 0.05 + 1e-9 || (t - max).abs() < 1e-12);
         }
     }
 }
