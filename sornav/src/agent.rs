@@ -2152,7 +2152,7 @@ impl Agent {
         let arrival = self.view_arrival_m();
         for (_, id, centre, bottom) in objects {
             self.rechecked.push(id);
-            let Some(level) = self.frontiers.level_containing(bottom) else {
+            let Some(level) = self.object_level(bottom) else {
                 continue;
             };
             let Some(view) = self.object_view(id, centre) else {
@@ -2587,7 +2587,7 @@ impl Agent {
             .semantic
             .cluster(sornav_semantic_map::ClusterId(object.0))
             .map_or(centre.z, |c| c.bounds.min.z);
-        let Some(level) = self.frontiers.level_containing(bottom) else {
+        let Some(level) = self.object_level(bottom) else {
             return StopView::GaveUp("the object's floor is not mapped");
         };
         let Some(view) = self.object_view(object.0, centre) else {
@@ -2690,8 +2690,9 @@ impl Agent {
             return Ok(AgentCommand::Continue { mission: None });
         };
         let (lo, hi) = bounds.unwrap_or((centre, centre));
-        // The object's level: the floor below its lowest point.
-        let level = self.frontiers.level_containing(lo.z);
+        // The object's level: the floor below its lowest point, unless
+        // that is a floor or more below it (see `object_level`).
+        let level = self.object_level(lo.z);
         let view = level.and_then(|level| Some((level, self.object_view(target_id, centre)?)));
         let viewer = self.viewer();
         let approach = match &view {
@@ -2810,7 +2811,29 @@ impl Agent {
         let floors: Vec<f64> = self.frontiers.levels().map(|l| l.floor_z).collect();
         let top = floors.iter().copied().fold(f64::NEG_INFINITY, f64::max);
         let bottom = floors.iter().copied().fold(f64::INFINITY, f64::min);
-        self.config.frontier.levels.allow_stairs && (lo.z >= top + half || hi.z <= bottom - half)
+        self.config.frontier.levels.allow_stairs
+            && (lo.z >= top + half || hi.z <= bottom - half || self.object_level(lo.z).is_none())
+    }
+
+    /// The level of an object whose lowest observed point is at height
+    /// `bottom`: the floor below it
+    /// ([`MultiLevelMap::level_containing`]), unless that floor lies at
+    /// least `min_level_separation` below (the map's own distance between
+    /// two floors): the object then stands on a floor above it that is
+    /// not mapped yet (seen up a stairwell), and a view point on the
+    /// floor below, under the object, would be no view point at all.
+    /// Without stairs every object is on the one level.
+    fn object_level(&self, bottom: f64) -> Option<LevelId> {
+        let level = self.frontiers.level_containing(bottom)?;
+        if !self.config.frontier.levels.allow_stairs {
+            return Some(level);
+        }
+        let separation = self.config.frontier.levels.min_level_separation;
+        self.frontiers
+            .levels()
+            .find(|l| l.id == level)
+            .filter(|l| bottom - l.floor_z < separation)
+            .map(|l| l.id)
     }
 
     /// A candidate on an unmapped floor is approached over the stairs: the

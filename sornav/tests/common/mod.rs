@@ -74,6 +74,12 @@ impl World {
     /// that meet nothing return one unlabelled point beyond the range
     /// (free space up to the range).
     pub fn scan(&self, pos: Point2<f64>) -> Vec<LabeledPoint> {
+        self.scan_to(pos, 2.0)
+    }
+
+    /// [`scan`](Self::scan) with the columns' points up to `max_z` m
+    /// (2 m there: a camera's view of a room).
+    pub fn scan_to(&self, pos: Point2<f64>, max_z: f64) -> Vec<LabeledPoint> {
         let mut points = Vec::new();
         for k in 0..720 {
             let a = f64::from(k) * std::f64::consts::PI / 360.0;
@@ -89,7 +95,7 @@ impl World {
                     let (x, y) = (pos.x + d.0 * (t + 0.01), pos.y + d.1 * (t + 0.01));
                     let step = if b.label == WALL { 0.1 } else { 0.05 };
                     let mut z = b.z.0 + 0.01;
-                    while z < b.z.1.min(2.0) {
+                    while z < b.z.1.min(max_z) {
                         points.push(LabeledPoint::new(
                             x as f32,
                             y as f32,
@@ -114,12 +120,17 @@ impl World {
     }
 
     pub fn observation(&self, pose: RobotPose) -> Observation {
+        self.observation_to(pose, 2.0)
+    }
+
+    /// [`observation`](Self::observation) of [`scan_to`](Self::scan_to).
+    pub fn observation_to(&self, pose: RobotPose, max_z: f64) -> Observation {
         let xy = Point2::new(pose.position.x, pose.position.y);
         Observation {
             pose,
             sensor: Sensor::Cloud(CloudObservation {
                 origin: Point3::new(xy.x, xy.y, SENSOR_Z),
-                points: self.scan(xy),
+                points: self.scan_to(xy, max_z),
             }),
         }
     }
